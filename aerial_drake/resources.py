@@ -1,0 +1,34 @@
+"""Where the package's data files (SDF models, scenario YAML) are, installed or in a checkout."""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+
+_CHECKOUT_ROOT = Path(__file__).resolve().parent.parent
+
+
+def model_directory() -> Path:
+    """The folder holding ``package.xml`` and the SDF models.
+
+    In a source checkout this is ``models/sdf/``; in an installed wheel the same files are
+    shipped as the data package ``aerial_drake.sdf``.
+    """
+    candidates = [_CHECKOUT_ROOT / "models" / "sdf"]
+    try:
+        candidates.append(Path(str(resources.files("aerial_drake.sdf"))))
+    except ModuleNotFoundError:
+        pass
+    for folder in candidates:
+        if (folder / "package.xml").is_file():
+            return folder
+    raise FileNotFoundError(
+        "aerial_drake model files not found (looked for package.xml in "
+        + ", ".join(str(c) for c in candidates)
+        + "). Reinstall the package with `pip install .` from a full checkout."
+    )
+
+
+def scenario_directory() -> Path:
+    """The folder holding the scenario YAML files shipped with the package."""
+    return Path(str(resources.files("aerial_drake.scenarios")))
