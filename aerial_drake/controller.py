@@ -1,0 +1,146 @@
+"""The inertially decoupled controller of Section III as a Drake LeafSystem."""
+
+from __future__ import annotations
+
+import numpy as np
+from pydrake.common.value import AbstractValue
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.multibody.tree import Frame
+from pydrake.systems.framework import BasicVector, Context, LeafSystem, ValueProducer
+
+from aerial_drake.control import (
+    DIAGNOSTICS_SIZE, AssumptionViolation, ControlOutput, GainMatrices, Gains, Reference,
+    TaskKinematics, compute_control)
+from aerial_drake.decoupling import DecoupledDynamics
+from aerial_drake.reference import (
+    COM_REFERENCE_SIZE, HEADING_REFERENCE_SIZE, TASK_REFERENCE_SIZE, unpack_com_reference,
+    unpack_heading_reference, unpack_task_reference)
+
+#: Layout of the ``command`` output: thrust f (N), body torques mu (N m, base frame), joint
+#: torques tau (N m).
+COMMAND_THRUST = slice(0, 1)
+COMMAND_BODY_TORQUES = slice(1, 4)
+COMMAND_BASE = slice(0, 4)
+COMMAND_JOINT_TORQUES = slice(4, None)
+
+
+class DecoupledController(LeafSystem):
+    """The law (10)-(22) on the controller's own model of the plant.
+
+    Input ports:
+        - ``state``: the model plant's state ``[q; v]`` (quaternion floating base, 7 arm joints).
+        - ``com_reference`` (15), ``task_reference`` (27), ``heading_reference`` (9): as
+          produced by :class:`aerial_drake.reference.ReferenceGenerator`.
+
+    Output ports:
+        - ``command``: ``[f, mu (3), tau (n)]``, the inputs of (1).
+        - ``diagnostics``: see :data:`aerial_drake.control.DIAGNOSTICS_LAYOUT`.
+
+    Both outputs come from one cached evaluation per context (direct feedthrough). For the
+    paper's sampled controller, put a ZeroOrderHold after ``command`` (see
+    :mod:`aerial_drake.diagram`).
+
+    Args:
+        plant: the controller's model (a finalized, double, continuous MultibodyPlant; usually
+            ``models.make_plant("rigid").plant``), not the simulated plant.
+        end_effector_frame: the task frame E on ``plant``.
+        q3_joint_velocity_index: index in v of the joint whose angle is the 7th task coordinate.
+        gains: Table II gains; validated here (a ValueError names a bad field).
+        sigma_min_J3_limit, f_d_limit: thresholds of the Assumption 1 and 2 checks.
+    """
+
+    def __init__(self, plant: MultibodyPlant, end_effector_frame: Frame,
+                 q3_joint_velocity_index: int, q3_joint_position_index: int, gains: Gains, *,
+                 sigma_min_J3_limit: float = 1e-3, f_d_limit: float = 1.0):
+        super().__init__()
+        self._plant = plant
+        self._dynamics = DecoupledDynamics(plant)
+        nv = plant.num_velocities()
+        self._n = nv - 6
+        self._K = GainMatrices.from_gains(gains, n_task=self._n)
+        self._gravity = self._dynamics.gravity
+        self._frame = end_effector_frame
+        self._q3_v = q3_joint_velocity_index
+        self._q3_q = q3_joint_position_index
+        self._limits = dict(sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit)
+        self._plant_context = plant.CreateDefaultContext()
+        self.evaluations = 0  # number of control law evaluations (for tests and benchmarks)
+
+        nx = plant.num_positions() + nv
+        self._state_port = self.DeclareVectorInputPort("state", nx)
+        self._com_port = self.DeclareVectorInputPort("com_reference", COM_REFERENCE_SIZE)
+        self._task_port = self.DeclareVectorInputPort("task_reference", TASK_REFERENCE_SIZE)
+        self._heading_port = self.DeclareVectorInputPort("heading_reference",
+                                                         HEADING_REFERENCE_SIZE)
+        self._solution = self.DeclareCacheEntry(
+            description="control law solution",
+            value_producer=ValueProducer(
+                allocate=AbstractValue.Make(object()).Clone, calc=self._calc_solution),
+            prerequisites_of_calc={self.all_input_ports_ticket(), self.time_ticket()})
+        self.DeclareVectorOutputPort(
+            "command", 4 + self._n, self._calc_command,
+            prerequisites_of_calc={self._solution.ticket()})
+        self.DeclareVectorOutputPort(
+            "diagnostics", DIAGNOSTICS_SIZE, self._calc_diagnostics,
+            prerequisites_of_calc={self._solution.ticket()})
+
+    @property
+    def model_plant(self) -> MultibodyPlant:
+        return self._plant
+
+    def get_state_input_port(self):
+        return self._state_port
+
+    def get_command_output_port(self):
+        return self.GetOutputPort("command")
+
+    def get_diagnostics_output_port(self):
+        return self.GetOutputPort("diagnostics")
+
+    def solve(self, x: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
+              ) -> ControlOutput:
+        """The law at state ``x`` and packed references (no Drake context needed)."""
+        plant, ctx = self._plant, self._plant_context
+        plant.SetPositionsAndVelocities(ctx, x)
+        d = self._dynamics.compute(ctx)
+        J6, J6_dot = self._dynamics.frame_jacobian(d, self._frame)
+        nv = plant.num_velocities()
+        J_y = np.zeros((7, nv))
+        J_y[:6] = J6
+        J_y[6, self._q3_v] = 1.0
+        J_y_dot = np.zeros((7, nv))
+        J_y_dot[:6] = J6_dot
+        X_WE = self._frame.CalcPoseInWorld(ctx)
+        kin = TaskKinematics(p_WE=X_WE.translation(), R_WE=X_WE.rotation().matrix(),
+                             q3=float(x[self._q3_q]), J_y=J_y, J_y_dot=J_y_dot)
+        t = unpack_task_reference(task)
+        ref = Reference(
+            com=unpack_com_reference(com), p_ed=t.p_ed, R_ed=t.R_ed, q3d=t.q3d,
+            y_d_dot=np.concatenate([t.v_ed, t.w_ed, [t.q3d_dot]]),
+            y_d_ddot=np.concatenate([t.a_ed, t.dw_ed, [t.q3d_ddot]]),
+            b1d=unpack_heading_reference(heading))
+        self.evaluations += 1
+        return compute_control(d, kin, ref, self._K, self._gravity, **self._limits)
+
+    def _calc_solution(self, context: Context, value: AbstractValue) -> None:
+        x = self._state_port.Eval(context)
+        if not np.all(np.isfinite(x)):
+            raise FloatingPointError(
+                f"t = {context.get_time():.4f} s: the plant state is not finite (the simulation "
+                "diverged before the controller could act)")
+        try:
+            out = self.solve(x, self._com_port.Eval(context), self._task_port.Eval(context),
+                             self._heading_port.Eval(context))
+        except AssumptionViolation as err:
+            raise AssumptionViolation(f"t = {context.get_time():.4f} s: {err}") from None
+        value.set_value(out)
+
+    def _calc_command(self, context: Context, output: BasicVector) -> None:
+        out: ControlOutput = self._solution.Eval(context)
+        cmd = output.get_mutable_value()
+        cmd[0] = out.f
+        cmd[1:4] = out.mu
+        cmd[4:] = out.tau
+
+    def _calc_diagnostics(self, context: Context, output: BasicVector) -> None:
+        output.SetFromVector(self._solution.Eval(context).diagnostics)

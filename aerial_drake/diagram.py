@@ -1,0 +1,235 @@
+"""The closed loop as one Drake Diagram (Fig. 2 of the paper).
+
+:func:`build_closed_loop` wires the simulated plant and its SceneGraph, the reference generator,
+the controller (on its own rigid-body model of the plant), the zero-order hold, the actuator lag
+and saturation, the rotor drive, and two exported disturbance input ports. The disturbance
+sources and loggers are added around it by :func:`build_simulation`.
+
+Exported ports of the closed-loop diagram:
+
+- inputs ``helicopter_wrench`` and ``end_effector_wrench``: ``[torque; force]`` in World (6).
+- outputs ``plant_state``, ``command`` (what the controller asks for, after the hold),
+  ``applied_command`` (what reaches the plant, after lag and saturation), ``diagnostics``,
+  ``com_reference``, ``task_reference``, ``heading_reference``, ``query_object`` (for
+  visualisers), ``rotor_drive_torque`` (rotors variant only).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.primitives import (
+    Demultiplexer, FirstOrderLowPassFilter, MatrixGain, Multiplexer, Saturation,
+    VectorLogSink, ZeroOrderHold, LogVectorOutput, PassThrough)
+from pydrake.systems.controllers import PidController
+
+from aerial_drake.actuators import BaseWrenchApplier, lag_time_constant
+from aerial_drake.controller import DecoupledController
+from aerial_drake.disturbances import add_wrench_source
+from aerial_drake.models import AerialManipulator, add_to_builder, make_plant
+from aerial_drake.reference import ReferenceGenerator
+from aerial_drake.scenarios import Scenario
+
+
+@dataclass
+class ClosedLoop:
+    """The closed-loop diagram and handles into it."""
+
+    diagram: Diagram
+    plant_model: AerialManipulator  # the simulated plant (inside ``diagram``)
+    controller_model: AerialManipulator  # the controller's own rigid model
+    controller: DecoupledController
+    reference: ReferenceGenerator
+    zoh: ZeroOrderHold | None
+    lag: FirstOrderLowPassFilter | None
+    n_arm: int
+
+
+def state_projection(source: AerialManipulator, target: AerialManipulator) -> np.ndarray:
+    """Selection matrix mapping ``source``'s plant state to ``target``'s (joints matched by
+    name; the floating base by body). Used to feed the rigid model's controller from the
+    rotors plant."""
+    sp, tp = source.plant, target.plant
+    nq_s, nv_s = sp.num_positions(), sp.num_velocities()
+    nq_t, nv_t = tp.num_positions(), tp.num_velocities()
+    P = np.zeros((nq_t + nv_t, nq_s + nv_s))
+    for j in range(tp.num_joints()):
+        tj = tp.get_joint(_joint_index(j))
+        if tj.num_positions() == 0:
+            continue
+        sj = sp.GetJointByName(tj.name()) if sp.HasJointNamed(tj.name()) else None
+        if sj is None:
+            raise ValueError(f"joint '{tj.name()}' of the controller model is not in the plant")
+        for k in range(tj.num_positions()):
+            P[tj.position_start() + k, sj.position_start() + k] = 1.0
+        for k in range(tj.num_velocities()):
+            P[nq_t + tj.velocity_start() + k, nq_s + sj.velocity_start() + k] = 1.0
+    if not np.all(P.sum(axis=1) == 1.0):
+        raise ValueError("controller model state not covered by the plant's state")
+    return P
+
+
+def _joint_index(j: int):
+    from pydrake.multibody.tree import JointIndex
+    return JointIndex(j)
+
+
+def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop") -> ClosedLoop:
+    """The closed loop of ``scenario`` as one Diagram with exported disturbance inputs."""
+    builder = DiagramBuilder()
+    sim = add_to_builder(builder, scenario.plant_variant, time_step=0.0)
+    plant = sim.plant
+    plant.set_name("plant")
+    model = make_plant("rigid")
+    n = len(model.arm_joints)
+
+    reference = builder.AddSystem(ReferenceGenerator(scenario.trajectory))
+    reference.set_name("reference")
+    controller = builder.AddSystem(DecoupledController(
+        model.plant, model.end_effector_frame,
+        q3_joint_velocity_index=model.arm_joints[2].velocity_start(),
+        q3_joint_position_index=model.arm_joints[2].position_start(),
+        gains=scenario.gains, sigma_min_J3_limit=scenario.sigma_min_J3_limit,
+        f_d_limit=scenario.f_d_limit))
+    controller.set_name("controller")
+    for port in ("com_reference", "task_reference", "heading_reference"):
+        builder.Connect(reference.GetOutputPort(port), controller.GetInputPort(port))
+        builder.ExportOutput(reference.GetOutputPort(port), port)
+
+    state_out = plant.get_state_output_port()
+    if scenario.plant_variant == "rigid":
+        builder.Connect(state_out, controller.get_state_input_port())
+    else:
+        selector = builder.AddSystem(MatrixGain(state_projection(sim, model)))
+        selector.set_name("model_state")
+        builder.Connect(state_out, selector.get_input_port())
+        builder.Connect(selector.get_output_port(), controller.get_state_input_port())
+
+    # Sampling: the paper's controller runs at 1 kHz; period 0 means continuous feedback.
+    command = controller.get_command_output_port()
+    zoh = None
+    if scenario.controller_period > 0:
+        zoh = builder.AddSystem(ZeroOrderHold(scenario.controller_period, 4 + n))
+        zoh.set_name("sample_hold")
+        builder.Connect(command, zoh.get_input_port())
+        command = zoh.get_output_port()
+    builder.ExportOutput(command, "command")
+    builder.ExportOutput(controller.get_diagnostics_output_port(), "diagnostics")
+
+    split = builder.AddSystem(Demultiplexer([4, n]))
+    split.set_name("split_command")
+    builder.Connect(command, split.get_input_port())
+    base_cmd = split.get_output_port(0)
+    joint_cmd = split.get_output_port(1)
+
+    # Actuator lag on thrust and body torques only (Section IV).
+    lag = None
+    if scenario.actuation.lag_rise_time > 0:
+        lag = builder.AddSystem(FirstOrderLowPassFilter(
+            lag_time_constant(scenario.actuation.lag_rise_time), 4))
+        lag.set_name("actuator_lag")
+        builder.Connect(base_cmd, lag.get_input_port())
+        base_cmd = lag.get_output_port()
+
+    a = scenario.actuation
+    if a.saturate:
+        tmax = a.body_torque_max
+        base_sat = builder.AddSystem(Saturation([a.thrust_min, -tmax, -tmax, -tmax],
+                                                [a.thrust_max, tmax, tmax, tmax]))
+        base_sat.set_name("base_saturation")
+        effort = sim.arm_effort_limits()
+        joint_sat = builder.AddSystem(Saturation(-effort, effort))
+        joint_sat.set_name("joint_saturation")
+        builder.Connect(base_cmd, base_sat.get_input_port())
+        builder.Connect(joint_cmd, joint_sat.get_input_port())
+        base_cmd, joint_cmd = base_sat.get_output_port(), joint_sat.get_output_port()
+
+    applied = builder.AddSystem(Multiplexer([4, n]))
+    applied.set_name("applied_command")
+    builder.Connect(base_cmd, applied.get_input_port(0))
+    builder.Connect(joint_cmd, applied.get_input_port(1))
+    builder.ExportOutput(applied.get_output_port(), "applied_command")
+
+    wrench = builder.AddSystem(BaseWrenchApplier(
+        sim.base_body, sim.end_effector_body,
+        sim.end_effector_frame.GetFixedPoseInBodyFrame().translation(),
+        plant.num_multibody_states()))
+    wrench.set_name("base_wrench")
+    builder.Connect(base_cmd, wrench.GetInputPort("base_command"))
+    builder.Connect(state_out, wrench.GetInputPort("state"))
+    builder.Connect(wrench.get_output_port(), plant.get_applied_spatial_force_input_port())
+    builder.ExportInput(wrench.GetInputPort("helicopter_wrench"), "helicopter_wrench")
+    builder.ExportInput(wrench.GetInputPort("end_effector_wrench"), "end_effector_wrench")
+    builder.Connect(joint_cmd, plant.get_actuation_input_port(sim.arm))
+
+    if sim.rotor_joints:
+        _add_rotor_drive(builder, sim, scenario)
+
+    builder.ExportOutput(state_out, "plant_state")
+    builder.ExportOutput(sim.scene_graph.get_query_output_port(), "query_object")
+    diagram = builder.Build()
+    diagram.set_name(name)
+    return ClosedLoop(diagram=diagram, plant_model=sim, controller_model=model,
+                      controller=controller, reference=reference, zoh=zoh, lag=lag, n_arm=n)
+
+
+def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: Scenario):
+    """Holds the rotors at +-speed with Drake's PidController (damping-only: kp = ki = 0)."""
+    plant = sim.plant
+    nq, nv = plant.num_positions(), plant.num_velocities()
+    k = len(sim.rotor_joints)
+    P = np.zeros((2 * k, nq + nv))
+    for i, joint in enumerate(sim.rotor_joints):
+        P[i, joint.position_start()] = 1.0
+        P[k + i, nq + joint.velocity_start()] = 1.0
+    gain = scenario.rotors.drive_gain
+    pid = builder.AddSystem(PidController(P, np.eye(k), np.zeros(k), np.zeros(k),
+                                          np.full(k, gain)))
+    pid.set_name("rotor_drive")
+    from pydrake.systems.primitives import ConstantVectorSource
+    speeds = scenario.rotors.speed * np.array([1.0, -1.0])[:k]
+    desired = builder.AddSystem(ConstantVectorSource(np.concatenate([np.zeros(k), speeds])))
+    desired.set_name("rotor_speed")
+    builder.Connect(plant.get_state_output_port(), pid.get_input_port_estimated_state())
+    builder.Connect(desired.get_output_port(), pid.get_input_port_desired_state())
+    builder.Connect(pid.get_output_port_control(), plant.get_actuation_input_port(sim.helicopter))
+    builder.ExportOutput(pid.get_output_port_control(), "rotor_drive_torque")
+
+
+@dataclass
+class Simulation:
+    """A closed loop with its disturbance sources and loggers, ready to simulate."""
+
+    diagram: Diagram
+    closed_loop: ClosedLoop
+    loggers: dict[str, VectorLogSink]
+
+
+LOGGED_PORTS = ("plant_state", "command", "applied_command", "diagnostics", "com_reference",
+                "task_reference", "heading_reference", "rotor_drive_torque")
+
+
+def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = None,
+                     ) -> tuple[DiagramBuilder, ClosedLoop, dict[str, VectorLogSink]]:
+    """Add the closed loop, the scenario's disturbance sources and loggers to ``builder``.
+
+    Returns the builder (not yet built, so callers can add a visualiser), the closed loop and
+    the loggers by port name.
+    """
+    builder = builder or DiagramBuilder()
+    loop = build_closed_loop(scenario)
+    builder.AddSystem(loop.diagram)
+    for target, port in (("helicopter", "helicopter_wrench"),
+                         ("end_effector", "end_effector_wrench")):
+        source = add_wrench_source(builder, scenario.disturbances, target)
+        builder.Connect(source.get_output_port(), loop.diagram.GetInputPort(port))
+    loggers = {}
+    for port in LOGGED_PORTS:
+        if loop.diagram.HasOutputPort(port):
+            logger = LogVectorOutput(loop.diagram.GetOutputPort(port), builder,
+                                     scenario.log_period)
+            logger.set_name(f"log_{port}")
+            loggers[port] = logger
+    return builder, loop, loggers

@@ -1,0 +1,124 @@
+"""Configurations that realise a task: Drake's InverseKinematics on the CoM, base attitude,
+end-effector pose and q3, and the hover inputs that hold such a configuration."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from pydrake.math import RotationMatrix
+from pydrake.multibody.inverse_kinematics import ComPositionConstraint, InverseKinematics
+from pydrake.solvers import Solve
+
+from aerial_drake.models import AerialManipulator
+
+
+class UnreachablePose(ValueError):
+    """The requested CoM / end-effector pose / q3 cannot be realised by the model."""
+
+
+@dataclass(frozen=True)
+class ConfigurationResidual:
+    com: float  # m
+    ee_position: float  # m
+    ee_orientation: float  # rad
+    base_orientation: float  # rad
+    q3: float  # rad
+
+    def worst(self, tol_m: float, tol_rad: float) -> list[str]:
+        """Names of the constraints violated beyond the tolerances."""
+        failed = []
+        for name, value, tol in (
+                ("CoM position", self.com, tol_m), ("end-effector position", self.ee_position, tol_m),
+                ("end-effector orientation", self.ee_orientation, tol_rad),
+                ("base orientation", self.base_orientation, tol_rad), ("q3", self.q3, tol_rad)):
+            if not value <= tol:
+                failed.append(f"{name} (off by {value:.3g})")
+        return failed
+
+
+def solve_configuration(manip: AerialManipulator, *, p_WG: np.ndarray, R_WB: np.ndarray,
+                        p_WE: np.ndarray, R_WE: np.ndarray, q3: float,
+                        q_guess: np.ndarray | None = None, tolerance: float = 1e-8,
+                        ) -> np.ndarray:
+    """Generalized positions with the system CoM at ``p_WG``, the base at orientation ``R_WB``,
+    the end-effector frame at ``(p_WE, R_WE)`` and joint 3 at ``q3``.
+
+    Ten equations in ten unknowns (base position, seven joints): the solution is locally
+    unique. Joint limits are respected. Raises :class:`UnreachablePose` naming the constraints
+    that could not be met.
+    """
+    plant = manip.plant
+    ik = InverseKinematics(plant, with_joint_limits=True)
+    q = ik.q()
+    prog = ik.get_mutable_prog()
+    world = plant.world_frame()
+    ik.AddOrientationConstraint(world, RotationMatrix(R_WB), manip.base_body.body_frame(),
+                                RotationMatrix(), 0.0)
+    ik.AddPositionConstraint(manip.end_effector_frame, np.zeros(3), world, p_WE, p_WE)
+    ik.AddOrientationConstraint(world, RotationMatrix(R_WE), manip.end_effector_frame,
+                                RotationMatrix(), 0.0)
+    r = prog.NewContinuousVariables(3, "p_WG")
+    prog.AddConstraint(ComPositionConstraint(plant, None, world, ik.context()),
+                       np.concatenate([q, r]))
+    prog.AddBoundingBoxConstraint(p_WG, p_WG, r)
+    i3 = manip.arm_joints[2].position_start()
+    prog.AddBoundingBoxConstraint(q3, q3, q[i3])
+    if q_guess is None:
+        q_guess = nominal_positions(manip, p_WB=np.asarray(p_WE) + [-0.3, 0.0, 0.6],
+                                    R_WB=R_WB)
+    prog.SetInitialGuess(q, q_guess)
+    prog.SetInitialGuess(r, p_WG)
+    result = Solve(prog)
+    q_sol = result.GetSolution(q)
+    q_sol[:4] /= np.linalg.norm(q_sol[:4]) if manip.floating_base == "quaternion" else 1.0
+    residual = configuration_residual(manip, q_sol, p_WG=p_WG, R_WB=R_WB, p_WE=p_WE,
+                                      R_WE=R_WE, q3=q3)
+    failed = residual.worst(tol_m=max(tolerance, 1e-6), tol_rad=max(tolerance, 1e-6))
+    if failed:
+        raise UnreachablePose(
+            "no configuration meets the requested pose; failing constraints: "
+            + ", ".join(failed) + f" (solver: {result.get_solver_id().name()}, "
+            f"{result.get_solution_result()}). Move the end effector closer to the "
+            "helicopter's CoM offset the model supports (docs/models.md).")
+    return q_sol
+
+
+def configuration_residual(manip: AerialManipulator, q: np.ndarray, *, p_WG, R_WB, p_WE,
+                           R_WE, q3) -> ConfigurationResidual:
+    plant = manip.plant
+    ctx = plant.CreateDefaultContext()
+    plant.SetPositions(ctx, q)
+    X_WE = manip.end_effector_frame.CalcPoseInWorld(ctx)
+    R_actual = plant.EvalBodyPoseInWorld(ctx, manip.base_body).rotation()
+
+    def angle(Ra: RotationMatrix, Rb: np.ndarray) -> float:
+        return float(Ra.InvertAndCompose(RotationMatrix(Rb)).ToAngleAxis().angle())
+
+    return ConfigurationResidual(
+        com=float(np.linalg.norm(plant.CalcCenterOfMassPositionInWorld(ctx) - p_WG)),
+        ee_position=float(np.linalg.norm(X_WE.translation() - p_WE)),
+        ee_orientation=angle(X_WE.rotation(), R_WE),
+        base_orientation=angle(R_actual, R_WB),
+        q3=abs(float(q[manip.arm_joints[2].position_start()]) - q3))
+
+
+def nominal_positions(manip: AerialManipulator, p_WB: np.ndarray, R_WB: np.ndarray,
+                      ) -> np.ndarray:
+    """Generalized positions with the base at ``(p_WB, R_WB)`` and the arm at its nominal
+    hover posture (docs/models.md)."""
+    plant = manip.plant
+    ctx = plant.CreateDefaultContext()
+    from pydrake.math import RigidTransform  # local: only needed here
+    plant.SetFreeBodyPose(ctx, manip.base_body, RigidTransform(RotationMatrix(R_WB), p_WB)) \
+        if manip.floating_base == "quaternion" else _set_rpy_base(manip, ctx, p_WB, R_WB)
+    q = plant.GetPositions(ctx)
+    q[manip.arm_position_indices] = manip.q_nominal_arm()
+    return q
+
+
+def _set_rpy_base(manip: AerialManipulator, ctx, p_WB, R_WB) -> None:
+    from pydrake.math import RollPitchYaw
+    joint = manip.plant.GetJointByName("base")
+    joint.set_translation(ctx, p_WB)
+    joint.set_angles(ctx, RollPitchYaw(RotationMatrix(R_WB)).vector())

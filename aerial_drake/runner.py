@@ -1,0 +1,207 @@
+"""Simulate a scenario: initial state, progress, failure messages, logs and metrics."""
+
+from __future__ import annotations
+
+import json
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
+from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
+from pydrake.systems.framework import Context, Diagram, EventStatus
+
+from aerial_drake.control import DIAGNOSTICS_LAYOUT, AssumptionViolation, desired_attitude
+from aerial_drake.diagram import ClosedLoop, build_simulation
+from aerial_drake.equilibrium import solve_configuration
+from aerial_drake.metrics import compute_metrics, phase_edges
+from aerial_drake.models import AerialManipulator
+from aerial_drake.reference import evaluate_reference
+from aerial_drake.scenarios import Scenario
+
+
+class SimulationFailed(RuntimeError):
+    """The closed loop could not be simulated to the end; the message says when and why."""
+
+
+@dataclass
+class RunResult:
+    scenario: Scenario
+    log: dict[str, np.ndarray]
+    metrics: dict
+    wall_time_s: float
+    completed: bool = True
+    failure: str | None = None
+    out_dir: Path | None = None
+    extra: dict = field(default_factory=dict)
+
+
+def reference_configuration(scenario: Scenario, model: AerialManipulator,
+                            t: float = 0.0) -> np.ndarray:
+    """Positions of ``model`` that realise the reference at time ``t`` exactly: CoM on x_d,
+    base attitude R_d of (13) for zero CoM error, end effector on (p_ed, R_ed), q3 = q3d."""
+    ref = evaluate_reference(scenario.trajectory, t)
+    m = model.plant.CalcTotalMass(model.plant.CreateDefaultContext())
+    g = -model.plant.gravity_field().gravity_vector()
+    x = ref.com
+    R_d = desired_attitude(m * (x[2] + g), m * x[3], m * x[4], ref.b1d)[0]
+    return solve_configuration(model, p_WG=x[0], R_WB=R_d, p_WE=ref.p_ed, R_WE=ref.R_ed,
+                               q3=ref.q3d)
+
+
+def set_initial_state(scenario: Scenario, loop: ClosedLoop, plant_context: Context) -> None:
+    """The reference configuration at t = 0 with the scenario's documented offsets, at rest
+    (rotors, if any, already at speed)."""
+    model, sim = loop.controller_model, loop.plant_model
+    q_model = reference_configuration(scenario, model)
+    ctx = model.plant.CreateDefaultContext()
+    model.plant.SetPositions(ctx, q_model)
+    X_WB = model.plant.EvalBodyPoseInWorld(ctx, model.base_body)
+    init = scenario.initial
+    R0 = RollPitchYaw(init.base_rpy_offset).ToRotationMatrix() @ X_WB.rotation()
+    p0 = X_WB.translation() + np.asarray(init.base_position_offset)
+    sim.plant.SetFreeBodyPose(plant_context, sim.base_body, RigidTransform(R0, p0))
+    for joint, mj, offset in zip(sim.arm_joints, model.arm_joints, init.arm_offset):
+        joint.set_angle(plant_context, q_model[mj.position_start()] + offset)
+    for joint, sign in zip(sim.rotor_joints, (1.0, -1.0)):
+        joint.set_angular_rate(plant_context, sign * scenario.rotors.speed)
+
+
+def _prime_held_inputs(loop: ClosedLoop, context: Context) -> None:
+    """Start the hold and the lag at the controller's first command, so t = 0 has no step."""
+    cmd = loop.controller.get_command_output_port().Eval(
+        loop.controller.GetMyContextFromRoot(context))
+    if loop.zoh is not None:
+        loop.zoh.SetVectorState(loop.zoh.GetMyMutableContextFromRoot(context), cmd)
+    if loop.lag is not None:
+        loop.lag.set_initial_output_value(loop.lag.GetMyMutableContextFromRoot(context),
+                                          cmd[:4])
+
+
+class _Progress:
+    """Prints simulated time, wall time and real-time factor every ``every`` simulated seconds,
+    and stops the simulation on a non-finite state."""
+
+    def __init__(self, diagram: Diagram, loop: ClosedLoop, duration: float, every: float,
+                 stream) -> None:
+        self.diagram, self.loop, self.duration = diagram, loop, duration
+        self.every, self.stream = every, stream
+        self.next_print = every
+        self.start = time.perf_counter()
+        self.failure: str | None = None
+
+    def __call__(self, root_context: Context) -> EventStatus:
+        t = root_context.get_time()
+        if self.stream is not None and t >= self.next_print - 1e-9:
+            wall = time.perf_counter() - self.start
+            self.stream.write(f"\r  t = {t:6.2f} / {self.duration:g} s   wall {wall:6.1f} s   "
+                              f"real-time factor {t / max(wall, 1e-9):5.1f}x")
+            self.stream.flush()
+            self.next_print += self.every
+        x = self.loop.plant_model.plant.GetPositionsAndVelocities(
+            self.loop.plant_model.plant.GetMyContextFromRoot(root_context))
+        if not np.all(np.isfinite(x)):
+            self.failure = f"t = {t:.4f} s: the plant state became non-finite (diverged)"
+            return EventStatus.Failed(self.diagram, self.failure)
+        return EventStatus.Succeeded()
+
+
+def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
+                 progress: bool = True, stream=None,
+                 configure: Callable | None = None) -> RunResult:
+    """Simulate ``scenario``; write ``log.npz`` and ``metrics.json`` to ``out_dir`` if given.
+
+    A failure (an assumption of the paper violated, a diverging state) stops the run with
+    :class:`SimulationFailed` naming the time and the reason; the logs up to that instant are
+    still written to ``out_dir`` first. ``configure(builder, loop)`` may add systems (e.g. a
+    visualiser) before the diagram is built.
+    """
+    scenario.validate()
+    stream = stream if stream is not None else sys.stderr
+    builder, loop, loggers = build_simulation(scenario)
+    if configure is not None:
+        configure(builder, loop)
+    diagram = builder.Build()
+    diagram.set_name(f"scenario_{scenario.name}")
+    simulator = Simulator(diagram)
+    ApplySimulatorConfig(scenario.simulator, simulator)
+    context = simulator.get_mutable_context()
+    plant_context = loop.plant_model.plant.GetMyMutableContextFromRoot(context)
+    set_initial_state(scenario, loop, plant_context)
+    _prime_held_inputs(loop, context)
+    monitor = _Progress(diagram, loop, scenario.duration, every=1.0,
+                        stream=stream if progress else None)
+    simulator.set_monitor(monitor)
+
+    failure = None
+    start = time.perf_counter()
+    try:
+        simulator.Initialize()
+        simulator.AdvanceTo(scenario.duration)
+    except (AssumptionViolation, FloatingPointError) as err:
+        failure = str(err)
+    except RuntimeError as err:
+        failure = monitor.failure or str(err)
+    wall = time.perf_counter() - start
+    if progress:
+        stream.write("\n")
+    log = {port: logger.FindLog(context) for port, logger in loggers.items()}
+    arrays = {"t": log["plant_state"].sample_times()}
+    for port, entry in log.items():
+        arrays[port] = entry.data().T
+    n = min(len(v) for v in arrays.values())
+    arrays = {k: v[:n] for k, v in arrays.items()}
+    sim_time = float(context.get_time())
+    metrics = _metrics(scenario, loop, arrays, wall, sim_time)
+    result = RunResult(scenario=scenario, log=arrays, metrics=metrics, wall_time_s=wall,
+                       completed=failure is None, failure=failure)
+    if out_dir is not None:
+        result.out_dir = write_outputs(result, out_dir)
+    if failure is not None:
+        raise SimulationFailed(f"scenario '{scenario.name}' stopped: {failure}")
+    return result
+
+
+def input_limits(scenario: Scenario, loop: ClosedLoop) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper limits of [f, mu, tau] (inf where the scenario does not saturate)."""
+    a = scenario.actuation
+    effort = loop.plant_model.arm_effort_limits()
+    if not a.saturate:
+        inf = np.full(4 + loop.n_arm, np.inf)
+        return -inf, inf
+    tm = a.body_torque_max
+    lower = np.concatenate([[a.thrust_min, -tm, -tm, -tm], -effort])
+    upper = np.concatenate([[a.thrust_max, tm, tm, tm], effort])
+    return lower, upper
+
+
+def _metrics(scenario: Scenario, loop: ClosedLoop, log: dict, wall: float,
+             sim_time: float) -> dict:
+    lower, upper = input_limits(scenario, loop)
+    windows = [(d.start, d.stop) for d in scenario.disturbances]
+    edges = phase_edges(windows, scenario.duration)
+    metrics = compute_metrics(log["t"], log["diagnostics"], log["applied_command"], lower,
+                              upper, edges, scenario.log_period)
+    metrics.update({
+        "scenario": scenario.name,
+        "simulated_time_s": sim_time,
+        "wall_time_s": wall,
+        "real_time_factor": sim_time / wall if wall > 0 else float("nan"),
+        "controller_evaluations": loop.controller.evaluations,
+    })
+    return metrics
+
+
+def write_outputs(result: RunResult, out_dir: str | Path) -> Path:
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    names = json.dumps({"diagnostics": [list(x) for x in DIAGNOSTICS_LAYOUT]})
+    np.savez_compressed(out / "log.npz", layout=np.array(names), **result.log)
+    metrics = dict(result.metrics)
+    metrics["completed"] = result.completed
+    metrics["failure"] = result.failure
+    (out / "metrics.json").write_text(json.dumps(metrics, indent=2))
+    return out
