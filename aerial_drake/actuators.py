@@ -1,8 +1,9 @@
 """What turns the controller's command into forces on the plant (Sections II and IV).
 
-- :class:`BaseWrenchApplier`: thrust ``f`` along the body z axis and body torques ``mu`` as one
-  body wrench at the helicopter's frame (2), plus external disturbance wrenches (World) at the
-  helicopter and at the end effector, as Drake ``ExternallyAppliedSpatialForce``s.
+- :func:`make_base_actuator`: thrust ``f`` along the body z axis and body torques ``mu`` as a
+  body wrench at the helicopter's frame (2), with Drake's ``Propeller`` system.
+- :func:`free_body_wrench_map` and :class:`PointWrenchApplier`: external disturbance wrenches
+  (World) at the helicopter frame and at the end effector.
 - :func:`lag_time_constant`: the first-order actuator lag of the disturbed case; the lag itself
   is Drake's ``FirstOrderLowPassFilter`` and the limits Drake's ``Saturation`` (wired in
   :mod:`aerial_drake.diagram`).
@@ -15,7 +16,8 @@ import math
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.multibody.math import SpatialForce
-from pydrake.multibody.plant import ExternallyAppliedSpatialForce
+from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.multibody.plant import ExternallyAppliedSpatialForce, Propeller, PropellerInfo
 from pydrake.multibody.tree import RigidBody
 from pydrake.systems.framework import Context, LeafSystem
 
@@ -26,55 +28,50 @@ def lag_time_constant(rise_time: float) -> float:
     return rise_time / math.log(9.0)
 
 
-def quaternion_to_rotation(q: np.ndarray) -> np.ndarray:
-    """R_WB from Drake's floating-base quaternion [w, x, y, z] (normalised here)."""
-    w, x, y, z = q / np.sqrt(q @ q)
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+def make_base_actuator(base_body: RigidBody) -> Propeller:
+    """The helicopter's thrust and body torques (2) as Drake's ``Propeller`` system.
 
-
-class BaseWrenchApplier(LeafSystem):
-    """Spatial forces on the plant from the base command and the disturbance wrenches.
-
-    Input ports:
-        - ``base_command``: ``[f, mu_x, mu_y, mu_z]``: thrust (N) along body z, body torques
-          (N m) about body axes; applied at the helicopter frame origin (its CoM).
-        - ``state``: the simulated plant's state (only the base quaternion ``q[0:4]`` is read).
-        - ``helicopter_wrench``: ``[torque (3); force (3)]`` in World at the helicopter frame.
-        - ``end_effector_wrench``: ``[torque (3); force (3)]`` in World at the end effector.
-
-    Output port ``spatial_forces``: for the plant's ``applied_spatial_force`` input.
+    Four "propellers" on the base body, all at its frame origin: one with thrust ratio 1 along
+    body z (the thrust f), and three with thrust ratio 0 and moment ratio 1 whose axes are the
+    body x, y and z axes (the torques mu). Its ``command`` input is ``[f, mu_x, mu_y, mu_z]``;
+    its ``spatial_forces`` output goes to the plant. Being C++, it costs next to nothing at each
+    integrator stage, and it keeps the wrench body-fixed as the base rotates.
     """
+    i = base_body.index()
+    axes = (RotationMatrix(),  # thrust along z
+            RotationMatrix.MakeYRotation(np.pi / 2),  # P's z = body x
+            RotationMatrix.MakeXRotation(-np.pi / 2),  # P's z = body y
+            RotationMatrix())  # P's z = body z
+    infos = [PropellerInfo(i, RigidTransform(axes[0]), thrust_ratio=1.0, moment_ratio=0.0)]
+    infos += [PropellerInfo(i, RigidTransform(R), thrust_ratio=0.0, moment_ratio=1.0)
+              for R in axes[1:]]
+    return Propeller(infos)
 
-    def __init__(self, base_body: RigidBody, end_effector_body: RigidBody,
-                 p_BoE_B: np.ndarray, num_states: int):
+
+def free_body_wrench_map(nv: int) -> np.ndarray:
+    """Generalized force of a World wrench ``[torque; force]`` applied at the base frame origin,
+    for a plant whose first six velocities are the base's ``[w_WB; v_WBo]`` (World): it is the
+    wrench itself (``J^T`` of the free joint at that point is the identity)."""
+    G = np.zeros((nv, 6))
+    G[:6, :6] = np.eye(6)
+    return G
+
+
+class PointWrenchApplier(LeafSystem):
+    """A World wrench ``[torque; force]`` (input ``wrench``, 6) applied at a point fixed on a
+    body, as a Drake ``ExternallyAppliedSpatialForce`` list (output ``spatial_forces``)."""
+
+    def __init__(self, body: RigidBody, p_BoQ_B: np.ndarray):
         super().__init__()
-        self._base_index = base_body.index()
-        self._ee_index = end_effector_body.index()
-        self._p_BoE_B = np.asarray(p_BoE_B, dtype=float).copy()
-        self.DeclareVectorInputPort("base_command", 4)
-        self.DeclareVectorInputPort("state", num_states)
-        self.DeclareVectorInputPort("helicopter_wrench", 6)
-        self.DeclareVectorInputPort("end_effector_wrench", 6)
+        self._force = ExternallyAppliedSpatialForce()
+        self._force.body_index = body.index()
+        self._force.p_BoBq_B = np.asarray(p_BoQ_B, dtype=float).copy()
+        self.DeclareVectorInputPort("wrench", 6)
         self.DeclareAbstractOutputPort(
-            "spatial_forces",
-            lambda: AbstractValue.Make([ExternallyAppliedSpatialForce()]),
+            "spatial_forces", lambda: AbstractValue.Make([ExternallyAppliedSpatialForce()]),
             self._calc)
 
     def _calc(self, context: Context, output: AbstractValue) -> None:
-        cmd = self.get_input_port(0).Eval(context)
-        R = quaternion_to_rotation(self.get_input_port(1).Eval(context)[:4])
-        heli = self.get_input_port(2).Eval(context)
-        ee = self.get_input_port(3).Eval(context)
-        # (2): w_b = [f e3; mu] in the body frame, re-expressed in World.
-        base = ExternallyAppliedSpatialForce()
-        base.body_index = self._base_index
-        base.p_BoBq_B = np.zeros(3)
-        base.F_Bq_W = SpatialForce(R @ cmd[1:4] + heli[:3], R[:, 2] * cmd[0] + heli[3:])
-        tip = ExternallyAppliedSpatialForce()
-        tip.body_index = self._ee_index
-        tip.p_BoBq_B = self._p_BoE_B
-        tip.F_Bq_W = SpatialForce(ee[:3], ee[3:])
-        output.set_value([base, tip])
+        w = self.get_input_port(0).Eval(context)
+        self._force.F_Bq_W = SpatialForce(w[:3], w[3:])
+        output.set_value([self._force])

@@ -21,11 +21,13 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import (
-    Demultiplexer, FirstOrderLowPassFilter, MatrixGain, Multiplexer, Saturation,
-    VectorLogSink, ZeroOrderHold, LogVectorOutput, PassThrough)
+    ConstantVectorSource, Demultiplexer, FirstOrderLowPassFilter, LogVectorOutput, MatrixGain,
+    Multiplexer, PassThrough, Saturation, VectorLogSink, ZeroOrderHold)
+from pydrake.multibody.plant import ExternallyAppliedSpatialForceMultiplexer
 from pydrake.systems.controllers import PidController
 
-from aerial_drake.actuators import BaseWrenchApplier, lag_time_constant
+from aerial_drake.actuators import (
+    PointWrenchApplier, free_body_wrench_map, lag_time_constant, make_base_actuator)
 from aerial_drake.controller import DecoupledController
 from aerial_drake.disturbances import add_wrench_source
 from aerial_drake.models import AerialManipulator, add_to_builder, make_plant
@@ -152,16 +154,29 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop") -> Close
     builder.Connect(joint_cmd, applied.get_input_port(1))
     builder.ExportOutput(applied.get_output_port(), "applied_command")
 
-    wrench = builder.AddSystem(BaseWrenchApplier(
-        sim.base_body, sim.end_effector_body,
-        sim.end_effector_frame.GetFixedPoseInBodyFrame().translation(),
-        plant.num_multibody_states()))
-    wrench.set_name("base_wrench")
-    builder.Connect(base_cmd, wrench.GetInputPort("base_command"))
-    builder.Connect(state_out, wrench.GetInputPort("state"))
-    builder.Connect(wrench.get_output_port(), plant.get_applied_spatial_force_input_port())
-    builder.ExportInput(wrench.GetInputPort("helicopter_wrench"), "helicopter_wrench")
-    builder.ExportInput(wrench.GetInputPort("end_effector_wrench"), "end_effector_wrench")
+    # (2): thrust along body z and body torques, at the helicopter frame.
+    base_actuator = builder.AddSystem(make_base_actuator(sim.base_body))
+    base_actuator.set_name("base_actuator")
+    builder.Connect(base_cmd, base_actuator.get_command_input_port())
+    builder.Connect(plant.get_body_poses_output_port(), base_actuator.get_body_poses_input_port())
+    # Disturbances: at the helicopter frame as a generalized force, at the end effector as a
+    # spatial force at the end-effector point.
+    heli_wrench = builder.AddSystem(PassThrough(6))
+    heli_wrench.set_name("helicopter_wrench")
+    to_generalized = builder.AddSystem(MatrixGain(free_body_wrench_map(plant.num_velocities())))
+    to_generalized.set_name("helicopter_wrench_to_generalized_force")
+    builder.Connect(heli_wrench.get_output_port(), to_generalized.get_input_port())
+    builder.Connect(to_generalized.get_output_port(), plant.get_applied_generalized_force_input_port())
+    ee_wrench = builder.AddSystem(PointWrenchApplier(
+        sim.end_effector_body, sim.end_effector_frame.GetFixedPoseInBodyFrame().translation()))
+    ee_wrench.set_name("end_effector_wrench")
+    forces = builder.AddSystem(ExternallyAppliedSpatialForceMultiplexer(2))
+    forces.set_name("spatial_forces")
+    builder.Connect(base_actuator.get_spatial_forces_output_port(), forces.get_input_port(0))
+    builder.Connect(ee_wrench.get_output_port(), forces.get_input_port(1))
+    builder.Connect(forces.get_output_port(), plant.get_applied_spatial_force_input_port())
+    builder.ExportInput(heli_wrench.get_input_port(), "helicopter_wrench")
+    builder.ExportInput(ee_wrench.get_input_port(), "end_effector_wrench")
     builder.Connect(joint_cmd, plant.get_actuation_input_port(sim.arm))
 
     if sim.rotor_joints:
@@ -188,7 +203,6 @@ def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: 
     pid = builder.AddSystem(PidController(P, np.eye(k), np.zeros(k), np.zeros(k),
                                           np.full(k, gain)))
     pid.set_name("rotor_drive")
-    from pydrake.systems.primitives import ConstantVectorSource
     speeds = scenario.rotors.speed * np.array([1.0, -1.0])[:k]
     desired = builder.AddSystem(ConstantVectorSource(np.concatenate([np.zeros(k), speeds])))
     desired.set_name("rotor_speed")

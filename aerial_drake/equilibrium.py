@@ -70,8 +70,8 @@ def solve_configuration(manip: AerialManipulator, *, p_WG: np.ndarray, R_WB: np.
     prog.SetInitialGuess(q, q_guess)
     prog.SetInitialGuess(r, p_WG)
     result = Solve(prog)
-    q_sol = result.GetSolution(q)
-    q_sol[:4] /= np.linalg.norm(q_sol[:4]) if manip.floating_base == "quaternion" else 1.0
+    q_sol = _newton_polish(manip, result.GetSolution(q), p_WG=p_WG, R_WB=R_WB, p_WE=p_WE,
+                           R_WE=R_WE, q3=q3)
     residual = configuration_residual(manip, q_sol, p_WG=p_WG, R_WB=R_WB, p_WE=p_WE,
                                       R_WE=R_WE, q3=q3)
     failed = residual.worst(tol_m=max(tolerance, 1e-6), tol_rad=max(tolerance, 1e-6))
@@ -82,6 +82,57 @@ def solve_configuration(manip: AerialManipulator, *, p_WG: np.ndarray, R_WB: np.
             f"{result.get_solution_result()}). Move the end effector closer to the "
             "helicopter's CoM offset the model supports (docs/models.md).")
     return q_sol
+
+
+def _newton_polish(manip: AerialManipulator, q: np.ndarray, *, p_WG, R_WB, p_WE, R_WE, q3,
+                   iterations: int = 8) -> np.ndarray:
+    """Newton steps on the square system (CoM, EE pose, q3 in base position and joints), with
+    the base attitude set exactly: IK's orientation constraints are only met to ~1e-5 rad."""
+    from pydrake.multibody.tree import JacobianWrtVariable
+    plant = manip.plant
+    ctx = plant.CreateDefaultContext()
+    plant.SetPositions(ctx, q)
+    p_WB = plant.EvalBodyPoseInWorld(ctx, manip.base_body).translation()
+    q = nominal_positions(manip, p_WB=p_WB, R_WB=R_WB) if manip.floating_base == "quaternion" \
+        else q.copy()
+    q[manip.arm_position_indices] = plant.GetPositions(ctx)[manip.arm_position_indices]
+    if manip.floating_base != "quaternion":
+        plant.SetPositions(ctx, q)
+        manip.base_joint.set_angles(ctx, _rpy(R_WB))
+        q = plant.GetPositions(ctx)
+    base_q = manip.base_position_indices[-3:]  # translation coordinates
+    cols = np.concatenate([manip.base_velocity_indices[3:], manip.arm_velocity_indices])
+    unknowns = np.concatenate([base_q, manip.arm_position_indices])
+    i3 = manip.arm_joints[2]
+    world, frame = plant.world_frame(), manip.end_effector_frame
+    kV = JacobianWrtVariable.kV
+    for _ in range(iterations):
+        plant.SetPositions(ctx, q)
+        X_WE = frame.CalcPoseInWorld(ctx)
+        r = np.concatenate([
+            plant.CalcCenterOfMassPositionInWorld(ctx) - p_WG,
+            X_WE.translation() - p_WE,
+            _vee_skew(X_WE.rotation().matrix() @ np.asarray(R_WE).T),
+            [q[i3.position_start()] - q3]])
+        if np.abs(r).max() < 1e-13:
+            break
+        J = np.zeros((10, plant.num_velocities()))
+        J[0:3] = plant.CalcJacobianCenterOfMassTranslationalVelocity(ctx, kV, world, world)
+        Jv = plant.CalcJacobianSpatialVelocity(ctx, kV, frame, np.zeros(3), world, world)
+        J[3:6], J[6:9] = Jv[3:], Jv[:3]
+        J[9, i3.velocity_start()] = 1.0
+        step = np.linalg.lstsq(J[:, cols], r, rcond=None)[0]
+        q[unknowns] -= step
+    return q
+
+
+def _vee_skew(S: np.ndarray) -> np.ndarray:
+    return 0.5 * np.array([S[2, 1] - S[1, 2], S[0, 2] - S[2, 0], S[1, 0] - S[0, 1]])
+
+
+def _rpy(R: np.ndarray) -> np.ndarray:
+    from pydrake.math import RollPitchYaw
+    return RollPitchYaw(RotationMatrix(R)).vector()
 
 
 def configuration_residual(manip: AerialManipulator, q: np.ndarray, *, p_WG, R_WB, p_WE,
@@ -118,7 +169,6 @@ def nominal_positions(manip: AerialManipulator, p_WB: np.ndarray, R_WB: np.ndarr
 
 
 def _set_rpy_base(manip: AerialManipulator, ctx, p_WB, R_WB) -> None:
-    from pydrake.math import RollPitchYaw
-    joint = manip.plant.GetJointByName("base")
+    joint = manip.base_joint
     joint.set_translation(ctx, p_WB)
-    joint.set_angles(ctx, RollPitchYaw(RotationMatrix(R_WB)).vector())
+    joint.set_angles(ctx, _rpy(R_WB))

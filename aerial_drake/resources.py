@@ -31,4 +31,4 @@ def model_directory() -> Path:
 
 def scenario_directory() -> Path:
     """The folder holding the scenario YAML files shipped with the package."""
-    return Path(str(resources.files("aerial_drake.scenarios")))
+    return Path(__file__).resolve().parent / "scenarios"
