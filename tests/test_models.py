@@ -288,7 +288,9 @@ def test_nominal_posture(variant, record_property):
     q = plant.GetPositions(context)[manip.arm_position_indices]
     np.testing.assert_array_equal(q, manip.q_nominal_arm())
     assert q[2] == 0.0
-    assert np.all(np.abs(q) <= 0.8 * ARM_LIMITS)
+    # Inside the limits with margin; the elbow is folded to 83 % of its range on purpose, to
+    # leave room for stretching under disturbances (docs/models.md, "How it was chosen").
+    assert np.all(np.abs(q) <= 0.85 * ARM_LIMITS)
 
     B = manip.base_body.body_frame()
     X_WB = B.CalcPoseInWorld(context)
