@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from aerial_drake.decoupling import Decomposition, vee
+from aerial_drake.decoupling import Decomposition, cross, vee
 
 _E3 = np.eye(3)
 _e3 = np.array([0.0, 0.0, 1.0])
@@ -154,15 +154,15 @@ def desired_attitude(f_d, f_d_dot, f_d_ddot, b1d):
     """R_d of (12)-(13) and its first two time derivatives, from f_d and the heading b1d."""
     b3, b3_dot, b3_ddot = unit_vector_derivatives(f_d, f_d_dot, f_d_ddot)  # (12)
     b1, b1_dot, b1_ddot = b1d
-    c = np.cross(b3, b1)
-    c_dot = np.cross(b3_dot, b1) + np.cross(b3, b1_dot)
-    c_ddot = np.cross(b3_ddot, b1) + 2.0 * np.cross(b3_dot, b1_dot) + np.cross(b3, b1_ddot)
+    c = cross(b3, b1)
+    c_dot = cross(b3_dot, b1) + cross(b3, b1_dot)
+    c_ddot = cross(b3_ddot, b1) + 2.0 * cross(b3_dot, b1_dot) + cross(b3, b1_ddot)
     b2, b2_dot, b2_ddot = unit_vector_derivatives(c, c_dot, c_ddot)
     # (13): R_d = [b2 x b3, b2, b3]
-    R_d = np.column_stack([np.cross(b2, b3), b2, b3])
-    R_d_dot = np.column_stack([np.cross(b2_dot, b3) + np.cross(b2, b3_dot), b2_dot, b3_dot])
+    R_d = np.column_stack([cross(b2, b3), b2, b3])
+    R_d_dot = np.column_stack([cross(b2_dot, b3) + cross(b2, b3_dot), b2_dot, b3_dot])
     R_d_ddot = np.column_stack([
-        np.cross(b2_ddot, b3) + 2.0 * np.cross(b2_dot, b3_dot) + np.cross(b2, b3_ddot),
+        cross(b2_ddot, b3) + 2.0 * cross(b2_dot, b3_dot) + cross(b2, b3_ddot),
         b2_ddot, b3_ddot])
     return R_d, R_d_dot, R_d_ddot, np.linalg.norm(c)
 
@@ -203,7 +203,7 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
     xg_dd = u1 * Re3 / m - ge3
     x_t_dd = xg_dd - xd2
     f_d_dot = m * xd3 - K.K_x * x_t_dot - K.D_x * x_t_dd
-    Re3_dot = R @ np.cross(w_b, _e3)
+    Re3_dot = R @ cross(w_b, _e3)
     u1_dot = f_d_dot @ Re3 + f_d @ Re3_dot
     xg_ddd = (u1_dot * Re3 + u1 * Re3_dot) / m
     f_d_ddot = m * xd4 - K.K_x * x_t_dd - K.D_x * (xg_ddd - xd3)
@@ -214,7 +214,7 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
     Omega_d_dot = vee(R_d_dot.T @ R_d_dot + R_d.T @ R_d_ddot)
     RtRd = R.T @ R_d
     w_d = RtRd @ Omega_d
-    w_d_dot = -np.cross(w_b, w_d) + RtRd @ Omega_d_dot
+    w_d_dot = -cross(w_b, w_d) + RtRd @ Omega_d_dot
     e_R = vee(R_d.T @ R)  # (14): vee() takes the skew part, 1/2 (A - A^T)
     w_t = w_b - w_d  # (15)
     # Under (16) the base's angular acceleration is this (used again by the task feed-forward).
