@@ -86,6 +86,11 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop") -> Close
     plant.set_name("plant")
     model = make_plant("rigid")
     n = len(model.arm_joints)
+    # MultibodyPlant silently clips actuation at the joints' effort limits, even in continuous
+    # mode. Saturation is ours to model and log (below, and only if the scenario asks), so
+    # lift the plant's own clip; the limits stay on the controller's model for reference.
+    for actuator in sim.arm_actuators:
+        actuator.set_effort_limit(np.inf)
 
     reference = builder.AddSystem(ReferenceGenerator(scenario.trajectory))
     reference.set_name("reference")
@@ -141,7 +146,7 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop") -> Close
         base_sat = builder.AddSystem(Saturation([a.thrust_min, -tmax, -tmax, -tmax],
                                                 [a.thrust_max, tmax, tmax, tmax]))
         base_sat.set_name("base_saturation")
-        effort = sim.arm_effort_limits()
+        effort = model.arm_effort_limits()
         joint_sat = builder.AddSystem(Saturation(-effort, effort))
         joint_sat.set_name("joint_saturation")
         builder.Connect(base_cmd, base_sat.get_input_port())

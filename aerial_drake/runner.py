@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
+from pydrake.common.yaml import yaml_dump_typed
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import Context, Diagram, EventStatus
@@ -17,7 +18,8 @@ from pydrake.systems.framework import Context, Diagram, EventStatus
 from aerial_drake.control import DIAGNOSTICS_LAYOUT, AssumptionViolation, desired_attitude
 from aerial_drake.diagram import ClosedLoop, build_simulation
 from aerial_drake.equilibrium import solve_configuration
-from aerial_drake.metrics import compute_metrics, phase_edges
+from aerial_drake.metrics import (
+    compute_metrics, disturbance_response, limits_by_input, phase_edges, rotor_metrics)
 from aerial_drake.models import AerialManipulator
 from aerial_drake.reference import evaluate_reference
 from aerial_drake.scenarios import Scenario
@@ -50,6 +52,45 @@ def reference_configuration(scenario: Scenario, model: AerialManipulator,
     R_d = desired_attitude(m * (x[2] + g), m * x[3], m * x[4], ref.b1d)[0]
     return solve_configuration(model, p_WG=x[0], R_WB=R_d, p_WE=ref.p_ed, R_WE=ref.R_ed,
                                q3=ref.q3d)
+
+
+#: How far (m) the desired end effector may stray from its nominal offset to the desired CoM,
+#: in the heading frame: the mount was chosen to keep J_3 conditioned 0.1 m and 0.5 rad away
+#: from nominal (docs/models.md); beyond 0.2 m the arm nears its reach or a singularity.
+WORKSPACE_RADIUS = 0.2
+
+
+def check_workspace(scenario: Scenario, model: AerialManipulator, *,
+                    radius: float = WORKSPACE_RADIUS, rate: float = 50.0) -> None:
+    """Raise ScenarioError if the reference leaves the arm's workspace at any sampled time.
+
+    The arm holds the end effector at a fixed offset from the system CoM in the heading frame
+    (x_d = x_c + R3(phi4) r_o, (33)); the task is feasible while the desired offset
+    R3(phi4)^T (p_ed - x_d) stays within ``radius`` of the model's nominal one.
+    """
+    from aerial_drake.reference import sample_reference
+    from aerial_drake.scenarios import ScenarioError
+    plant = model.plant
+    ctx = plant.CreateDefaultContext()
+    X_WB = plant.EvalBodyPoseInWorld(ctx, model.base_body)
+    nominal = X_WB.rotation().inverse() @ (
+        model.end_effector_frame.CalcPoseInWorld(ctx).translation()
+        - plant.CalcCenterOfMassPositionInWorld(ctx))
+    times = np.linspace(0.0, scenario.duration, int(scenario.duration * rate) + 1)
+    ref = sample_reference(scenario.trajectory, times)
+    offset = ref.p_ed - ref.com[:, 0]
+    b1 = ref.b1d[:, 0]  # heading direction (unit, horizontal)
+    x_h = np.einsum("ti,ti->t", offset, b1)
+    y_h = -offset[:, 0] * b1[:, 1] + offset[:, 1] * b1[:, 0]
+    dev = np.linalg.norm(np.column_stack([x_h, y_h, offset[:, 2]]) - nominal, axis=1)
+    worst = int(np.argmax(dev))
+    if dev[worst] > radius:
+        raise ScenarioError(
+            f"trajectory: the desired end effector leaves the arm's workspace at t = "
+            f"{times[worst]:.2f} s: it is {dev[worst]:.3f} m from its nominal offset "
+            f"{np.round(nominal, 3).tolist()} m to the desired CoM (heading frame; limit "
+            f"{radius} m). Reduce trajectory.agile_amplitude or keep trajectory.com_offset "
+            "near the model's nominal offset.")
 
 
 def set_initial_state(scenario: Scenario, loop: ClosedLoop, plant_context: Context) -> None:
@@ -122,6 +163,7 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     scenario.validate()
     stream = stream if stream is not None else sys.stderr
     builder, loop, loggers = build_simulation(scenario)
+    check_workspace(scenario, loop.controller_model)
     if configure is not None:
         configure(builder, loop)
     diagram = builder.Build()
@@ -168,7 +210,7 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
 def input_limits(scenario: Scenario, loop: ClosedLoop) -> tuple[np.ndarray, np.ndarray]:
     """Lower and upper limits of [f, mu, tau] (inf where the scenario does not saturate)."""
     a = scenario.actuation
-    effort = loop.plant_model.arm_effort_limits()
+    effort = loop.controller_model.arm_effort_limits()
     if not a.saturate:
         inf = np.full(4 + loop.n_arm, np.inf)
         return -inf, inf
@@ -191,7 +233,17 @@ def _metrics(scenario: Scenario, loop: ClosedLoop, log: dict, wall: float,
         "wall_time_s": wall,
         "real_time_factor": sim_time / wall if wall > 0 else float("nan"),
         "controller_evaluations": loop.controller.evaluations,
+        "input_limits": limits_by_input(lower, upper),
+        "disturbance_response": disturbance_response(
+            log["t"], log["diagnostics"],
+            [(d.target, d.start, d.stop) for d in scenario.disturbances]),
     })
+    sim = loop.plant_model
+    if sim.rotor_joints and "rotor_drive_torque" in log:
+        nq = sim.plant.num_positions()
+        metrics["rotors"] = rotor_metrics(
+            log["plant_state"][:, nq + sim.rotor_velocity_indices], log["rotor_drive_torque"],
+            scenario.rotors.speed * np.array([1.0, -1.0]))
     return metrics
 
 
@@ -204,4 +256,6 @@ def write_outputs(result: RunResult, out_dir: str | Path) -> Path:
     metrics["completed"] = result.completed
     metrics["failure"] = result.failure
     (out / "metrics.json").write_text(json.dumps(metrics, indent=2))
+    # The scenario as run (after overrides), so a run folder describes itself (plots read it).
+    (out / "scenario.yaml").write_text(yaml_dump_typed(result.scenario))
     return out
