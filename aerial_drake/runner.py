@@ -29,6 +29,10 @@ class SimulationFailed(RuntimeError):
     """The closed loop could not be simulated to the end; the message says when and why."""
 
 
+class SimulationInterrupted(SimulationFailed):
+    """The user stopped the run (Ctrl-C); what was logged is written all the same."""
+
+
 @dataclass
 class RunResult:
     scenario: Scenario
@@ -152,13 +156,16 @@ class _Progress:
 
 def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
                  progress: bool = True, stream=None,
-                 configure: Callable | None = None) -> RunResult:
+                 configure: Callable | None = None,
+                 realtime_rate: float | None = None) -> RunResult:
     """Simulate ``scenario``; write ``log.npz`` and ``metrics.json`` to ``out_dir`` if given.
 
     A failure (an assumption of the paper violated, a diverging state) stops the run with
     :class:`SimulationFailed` naming the time and the reason; the logs up to that instant are
     still written to ``out_dir`` first. ``configure(builder, loop)`` may add systems (e.g. a
-    visualiser) before the diagram is built.
+    visualiser) before the diagram is built. ``realtime_rate`` overrides the scenario's
+    target real-time rate (e.g. 1.0 to watch it). Ctrl-C stops the run the same way, with
+    :class:`SimulationInterrupted`.
     """
     scenario.validate()
     stream = stream if stream is not None else sys.stderr
@@ -170,23 +177,28 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     diagram.set_name(f"scenario_{scenario.name}")
     simulator = Simulator(diagram)
     ApplySimulatorConfig(scenario.simulator, simulator)
+    if realtime_rate is not None:
+        simulator.set_target_realtime_rate(realtime_rate)
     context = simulator.get_mutable_context()
     plant_context = loop.plant_model.plant.GetMyMutableContextFromRoot(context)
     set_initial_state(scenario, loop, plant_context)
-    _prime_held_inputs(loop, context)
     monitor = _Progress(diagram, loop, scenario.duration, every=1.0,
                         stream=stream if progress else None)
     simulator.set_monitor(monitor)
 
-    failure = None
+    failure, interrupted = None, False
     start = time.perf_counter()
     try:
+        _prime_held_inputs(loop, context)
         simulator.Initialize()
         simulator.AdvanceTo(scenario.duration)
     except (AssumptionViolation, FloatingPointError) as err:
         failure = str(err)
     except RuntimeError as err:
         failure = monitor.failure or str(err)
+    except KeyboardInterrupt:
+        failure = f"interrupted (Ctrl-C) at t = {context.get_time():.3f} s"
+        interrupted = True
     wall = time.perf_counter() - start
     if progress:
         stream.write("\n")
@@ -203,7 +215,8 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     if out_dir is not None:
         result.out_dir = write_outputs(result, out_dir)
     if failure is not None:
-        raise SimulationFailed(f"scenario '{scenario.name}' stopped: {failure}")
+        error = SimulationInterrupted if interrupted else SimulationFailed
+        raise error(f"scenario '{scenario.name}' stopped: {failure}")
     return result
 
 

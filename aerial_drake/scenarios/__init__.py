@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from pydrake.common.yaml import yaml_load_typed
+from pydrake.common.yaml import yaml_load_data, yaml_load_typed
 from pydrake.systems.analysis import SimulatorConfig
 
 from aerial_drake.control import Gains
@@ -156,6 +156,35 @@ def _check_vector(name: str, value, size: int) -> None:
         raise ScenarioError(f"{name} must be a list of {size} finite numbers; got {value!r}")
 
 
+def _find_bad_field(data, schema, prefix: str = "") -> str | None:
+    """The dotted name of the first value in ``data`` that does not fit ``schema``'s type
+    (Drake's loader says what failed to convert, not where)."""
+    if not isinstance(data, dict) or not dataclasses.is_dataclass(schema):
+        return None
+    types = {f.name: f.type for f in dataclasses.fields(schema)}
+    for key, value in data.items():
+        name = f"{prefix}{key}"
+        kind = types.get(key)
+        if kind is None:
+            return name
+        if dataclasses.is_dataclass(kind):
+            found = _find_bad_field(value, kind, name + ".")
+            if found:
+                return found
+            continue
+        item = getattr(kind, "__args__", (None,))[0]
+        values = value if isinstance(value, list) else [value]
+        for v in values:
+            target = item if isinstance(value, list) and item is not None else kind
+            if target is float and not isinstance(v, (int, float)):
+                return f"{name} (expected a number, got {v!r})"
+            if target is str and not isinstance(v, str):
+                return f"{name} (expected text, got {v!r})"
+            if target is bool and not isinstance(v, bool):
+                return f"{name} (expected true or false, got {v!r})"
+    return None
+
+
 def shipped_scenarios() -> dict[str, Path]:
     """Name -> path of the scenario files shipped with the package."""
     return {p.stem: p for p in sorted(scenario_directory().glob("*.yaml"))}
@@ -177,8 +206,9 @@ def load_scenario(name_or_path: str | Path, *, overrides: dict | None = None) ->
         raise ScenarioError(f"scenario file not found: {path}")
     try:
         scenario = yaml_load_typed(schema=Scenario, filename=str(path))
-    except RuntimeError as err:
-        raise ScenarioError(f"{path}: {err}") from None
+    except (RuntimeError, ValueError, TypeError) as err:
+        where = _find_bad_field(yaml_load_data(path.read_text()), Scenario)
+        raise ScenarioError(f"{path}: {where + ': ' if where else ''}{err}") from None
     if overrides:
         scenario = dataclasses.replace(scenario, **overrides)
     return scenario.validate()

@@ -1,0 +1,95 @@
+"""Scenario files: loading, and clear errors that name the field before anything runs."""
+
+import pytest
+
+from aerial_drake.control import AssumptionViolation
+from aerial_drake.scenarios import ScenarioError, load_scenario, shipped_scenarios
+
+
+def write(tmp_path, text):
+    path = tmp_path / "s.yaml"
+    path.write_text(text)
+    return path
+
+
+def test_shipped_scenarios_load_and_hold_table_ii():
+    assert {"nominal", "orbit"} <= set(shipped_scenarios())
+    s = load_scenario("nominal")
+    assert s.gains.K_x == [800.0] * 3 and s.gains.D_x == [420.0] * 3
+    assert (s.gains.k_R, s.gains.k_w) == (250.0, 200.0)
+    assert s.gains.Lambda2_bar == [1.46, 0.36, 1.46]
+    assert s.gains.K_y == [30.0] * 3 + [10.0] * 3 + [7.0]
+    assert s.gains.K_z == [30.0] * 7
+    assert s.duration == 15.0 and s.controller_period == 1e-3
+    assert (s.actuation.thrust_max, s.actuation.body_torque_max) == (980.6, 200.0)
+
+
+def test_unknown_name_lists_the_shipped_ones():
+    with pytest.raises(ScenarioError, match="no scenario named 'nominl'.*nominal"):
+        load_scenario("nominl")
+
+
+def test_misspelt_key_names_the_field(tmp_path):
+    path = write(tmp_path, "name: x\ngains:\n  K_xx: [1.0, 1.0, 1.0]\n")
+    with pytest.raises(ScenarioError, match="K_xx"):
+        load_scenario(path)
+
+
+def test_wrong_type_names_the_field(tmp_path):
+    path = write(tmp_path, "name: x\nduration: fifteen\n")
+    with pytest.raises(ScenarioError, match="duration"):
+        load_scenario(path)
+
+
+def test_gain_not_positive_definite(tmp_path):
+    text = (shipped_scenarios()["nominal"].read_text()
+            .replace("K_z: [30.0, 30.0, 30.0, 30.0, 30.0, 30.0, 30.0]",
+                     "K_z: [30.0, 30.0, 30.0, -30.0, 30.0, 30.0, 30.0]"))
+    with pytest.raises(ScenarioError, match=r"gains\.K_z .*not positive definite"):
+        load_scenario(write(tmp_path, text))
+
+
+def test_missing_gains_are_named(tmp_path):
+    with pytest.raises(ScenarioError, match=r"gains\.K_x must be a list of 3"):
+        load_scenario(write(tmp_path, "name: x\n"))
+
+
+@pytest.mark.parametrize("override,match", [
+    ({"plant_variant": "quad"}, "plant_variant: 'quad' is not one of"),
+    ({"duration": -1.0}, "duration must be > 0"),
+    ({"controller_period": -1e-3}, "controller_period must be >= 0"),
+])
+def test_bad_values(override, match):
+    with pytest.raises(ScenarioError, match=match):
+        load_scenario("nominal", overrides=override)
+
+
+def test_bad_disturbance(tmp_path):
+    text = shipped_scenarios()["nominal"].read_text().replace("target: helicopter",
+                                                               "target: tail")
+    with pytest.raises(ScenarioError, match=r"disturbances\[0\]\.target: 'tail'"):
+        load_scenario(write(tmp_path, text))
+
+
+def test_assumption_2_vanishing_thrust():
+    """A free-falling CoM reference with zero error asks for f_d = 0: Assumption 2."""
+    import numpy as np
+    from aerial_drake.models import make_plant
+    from aerial_drake.controller import DecoupledController
+    from aerial_drake.reference import evaluate_reference
+    from aerial_drake.runner import reference_configuration
+
+    s = load_scenario("nominal")
+    model = make_plant("rigid")
+    ctrl = DecoupledController(model.plant, model.end_effector_frame,
+                               model.arm_joints[2].velocity_start(),
+                               model.arm_joints[2].position_start(), s.gains)
+    q = reference_configuration(s, model)
+    com, task, heading = evaluate_reference(s.trajectory, 0.0).to_vectors()
+    ctx = model.plant.CreateDefaultContext()
+    model.plant.SetPositions(ctx, q)
+    com = np.zeros(15)
+    com[:3] = model.plant.CalcCenterOfMassPositionInWorld(ctx)
+    com[8] = -9.81  # x_d'' = -g e3
+    with pytest.raises(AssumptionViolation, match=r"Assumption 2 violated: the desired thrust vanishes, \|f_d\| = [-+.e0-9]+ N"):
+        ctrl.solve(np.concatenate([q, np.zeros(13)]), com, task, heading)
