@@ -79,13 +79,15 @@ def test_disturbances_stay_bounded_and_reconverge(nominal):
     assert phases[(4.0, 5.0)]["ee_position_error_m"]["max"] < 0.01
     assert phases[(9.0, 10.0)]["ee_position_error_m"]["max"] < 0.2
     assert phases[(9.0, 10.0)]["ee_orientation_error_rad"]["max"] < 0.3
-    # Re-converged by the end of the following phase: below 2 % of the window's peak.
+    # Re-converged by the end of the following phase (4 s, or 5 s after the second window):
+    # below 5 % of the window's peak. The CoM and attitude recover with Table II's slowest
+    # closed-loop mode, k_R / k_w = 1.25 1/s (design notes 6).
     for window, after, end in (((4.0, 5.0), 5.0, 9.0), ((9.0, 10.0), 10.0, 15.0)):
         for key, diag in (("ee_position_error_m", "ee_position_error"),
                           ("com_position_error_m", "com_error"),
                           ("base_attitude_error_rad", "base_attitude_error")):
             peak = phases[window][key]["max"]
-            assert max_after(nominal, diag, end - 0.5, end) < 0.02 * peak, (window, key)
+            assert max_after(nominal, diag, end - 0.5, end) < 0.05 * peak, (window, key)
 
 
 def test_helicopter_push_barely_moves_the_end_effector(nominal):

@@ -1,0 +1,50 @@
+"""Median time of one full decomposition (Section II: M, C, g, J_b, Q, J_g, J_bw, Z, N, T,
+T^-1, T_dot, Lambda, Gamma, and the input map) at one state of our model, in microseconds.
+
+    python benchmarks/bench_decomposition.py [--repeats N]
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import statistics
+import time
+
+import numpy as np
+
+from aerial_drake.decoupling import DecoupledDynamics
+from aerial_drake.models import make_plant
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=2000)
+    args = parser.parse_args()
+    plant = make_plant("rigid").plant
+    ctx = plant.CreateDefaultContext()
+    dd = DecoupledDynamics(plant)
+    rng = np.random.default_rng(0)
+    states = []
+    for _ in range(16):
+        q = plant.GetPositions(ctx) + np.concatenate([[0, 0, 0, 0], rng.normal(size=3),
+                                                      rng.uniform(-0.5, 0.5, 7)])
+        states.append((q, rng.normal(size=plant.num_velocities())))
+    times = []
+    for k in range(args.repeats):
+        q, v = states[k % len(states)]
+        plant.SetPositions(ctx, q)
+        plant.SetVelocities(ctx, v)
+        start = time.perf_counter()
+        d = dd.compute(ctx)
+        _ = d.input_map
+        times.append(time.perf_counter() - start)
+    print(f"machine: {platform.machine()}, {platform.processor() or platform.platform()}, "
+          f"python {platform.python_version()}")
+    print(f"full decomposition: median {1e6 * statistics.median(times):.1f} us, "
+          f"10th percentile {1e6 * np.percentile(times, 10):.1f} us "
+          f"({args.repeats} evaluations)")
+
+
+if __name__ == "__main__":
+    main()

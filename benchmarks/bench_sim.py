@@ -1,0 +1,96 @@
+"""Simulation speed of the paper's scenarios (15 s, no Meshcat), printed as figures and ratios.
+
+For each scenario: median wall time over --repeats runs, real-time factor (simulated / wall),
+median control-law evaluation time (the controller replayed on the run's logged states), the
+same diagram with a zero controller (plant, reference and logging only) timed in the same
+session, their ratio, and the peak resident memory of one run. Each run is its own process,
+so the memory figure is that run's.
+
+    python benchmarks/bench_sim.py [--repeats 3] [--duration 15] [--scenarios nominal disturbed]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import resource
+import statistics
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+
+def worker(scenario_name: str, duration: float, zero: bool) -> dict:
+    from aerial_drake.runner import run_scenario
+    from aerial_drake.scenarios import load_scenario
+
+    scenario = load_scenario(scenario_name, overrides={"duration": duration})
+    result = run_scenario(scenario, progress=False, zero_controller=zero)
+    out = {"wall_s": result.wall_time_s,
+           "rtf": result.metrics["simulated_time_s"] / result.wall_time_s,
+           "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}
+    if not zero:
+        out["controller_us"] = _controller_time(scenario, result)
+    return out
+
+
+def _controller_time(scenario, result, samples: int = 1000) -> float:
+    """Median time of one control-law evaluation on states the run visited."""
+    from aerial_drake.diagram import build_closed_loop
+
+    loop = build_closed_loop(scenario)
+    ctrl, sim = loop.controller, loop.plant_model
+    idx = sim.rigid_state_indices
+    log = result.log
+    rows = np.linspace(0, len(log["t"]) - 1, samples).astype(int)
+    times = []
+    for k in rows:
+        x = log["plant_state"][k][idx]
+        start = time.perf_counter()
+        ctrl.solve(x, log["com_reference"][k], log["task_reference"][k],
+                   log["heading_reference"][k])
+        times.append(time.perf_counter() - start)
+    return 1e6 * statistics.median(times)
+
+
+def run_worker(name: str, duration: float, zero: bool) -> dict:
+    cmd = [sys.executable, __file__, "--worker", name, "--duration", str(duration)]
+    if zero:
+        cmd.append("--zero")
+    done = subprocess.run(cmd, check=True, capture_output=True, text=True)
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--duration", type=float, default=15.0)
+    parser.add_argument("--scenarios", nargs="+", default=["nominal", "disturbed"])
+    parser.add_argument("--worker", help=argparse.SUPPRESS)
+    parser.add_argument("--zero", action="store_true", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.worker:
+        print(json.dumps(worker(args.worker, args.duration, args.zero)))
+        return
+
+    print(f"machine: {platform.machine()}, {platform.platform()}, python "
+          f"{platform.python_version()}, {len(__import__('os').sched_getaffinity(0))} cores")
+    header = (f"{'scenario':>10} {'wall (s)':>9} {'RT factor':>10} {'ctrl (us)':>10} "
+              f"{'zero-ctrl wall':>15} {'ratio':>6} {'peak RSS (MB)':>14}")
+    print(header)
+    for name in args.scenarios:
+        full = [run_worker(name, args.duration, False) for _ in range(args.repeats)]
+        zero = [run_worker(name, args.duration, True) for _ in range(args.repeats)]
+        wall = statistics.median(r["wall_s"] for r in full)
+        zwall = statistics.median(r["wall_s"] for r in zero)
+        print(f"{name:>10} {wall:9.2f} {args.duration / wall:10.2f} "
+              f"{statistics.median(r['controller_us'] for r in full):10.1f} "
+              f"{zwall:15.2f} {wall / zwall:6.2f} "
+              f"{max(r['peak_rss_mb'] for r in full):14.0f}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
