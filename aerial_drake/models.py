@@ -54,10 +54,11 @@ ARM_MOUNT_FILE = "arm_mount.dmd.yaml"
 ARM_MODEL_NAME = "lwr"
 HELICOPTER_MODEL_NAME = "helicopter"
 
-#: Rotor speeds [rad/s] about the rotor joints' axes (left, right), Table I's +-26 pi rad/s.
-#: Counter-rotating, so the spin axes' vertical components of angular momentum cancel and the
-#: outward mast tilt leaves 2 (0.12)(26 pi) sin(12.5 deg) = 4.24 N m s along +y of the body.
-ROTOR_SPEEDS = (26.0 * np.pi, -26.0 * np.pi)
+#: Spin directions of the rotors (left, right) about their joints' axes: counter-rotating, so
+#: the spin axes' vertical components of angular momentum cancel and the outward mast tilt
+#: leaves 2 (0.12)(26 pi) sin(12.5 deg) = 4.24 N m s along +y of the body at Table I's speed
+#: (the speed itself is the scenario's ``rotors.speed``).
+ROTOR_DIRECTIONS = (1.0, -1.0)
 
 
 def _check_choice(what: str, value: str, options: tuple[str, ...]) -> None:

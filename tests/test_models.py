@@ -18,6 +18,10 @@ import aerial_drake
 from aerial_drake import models as dut
 from aerial_drake.resources import model_directory
 
+from aerial_drake.models import ROTOR_DIRECTIONS
+
+ROTOR_SPEEDS = 26.0 * np.pi * np.array(ROTOR_DIRECTIONS)  # Table I: +-26 pi rad/s
+
 CHECKOUT = Path(__file__).resolve().parents[1]
 TABLE_I_HELICOPTER_MASS = 37.6  # kg
 TABLE_I_HELICOPTER_INERTIA = np.diag([1.46, 0.36, 1.46])  # kg m^2
@@ -115,7 +119,7 @@ def test_rotors():
     # The documented net angular momentum: 2 I_s (26 pi) sin(12.5 deg) along +y_B.
     context = plant.CreateDefaultContext()
     v = np.zeros(plant.num_velocities())
-    v[manip.rotor_velocity_indices] = dut.ROTOR_SPEEDS
+    v[manip.rotor_velocity_indices] = ROTOR_SPEEDS
     plant.SetVelocities(context, v)
     h = plant.CalcSpatialMomentumInWorldAboutPoint(
         context, plant.CalcCenterOfMassPositionInWorld(context)

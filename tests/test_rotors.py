@@ -17,6 +17,10 @@ from aerial_drake.diagram import _add_rotor_drive, build_closed_loop
 from aerial_drake.runner import run_scenario
 from aerial_drake.scenarios import load_scenario
 
+from aerial_drake.models import ROTOR_DIRECTIONS
+
+ROTOR_SPEEDS = 26.0 * np.pi * np.array(ROTOR_DIRECTIONS)  # Table I: +-26 pi rad/s
+
 SPEED = 26.0 * math.pi  # Table I
 TILT = math.radians(12.5)  # docs/models.md
 # docs/models.md: 2 I_s (26 pi) sin(12.5 deg) along +y_B, I_s = 0.12 kg m^2.
@@ -39,7 +43,7 @@ def test_disturbed_scenario_speed_is_table_i():
     scenario = load_scenario("disturbed")
     assert scenario.plant_variant == "rotors"
     assert scenario.rotors.speed == pytest.approx(SPEED, rel=1e-15)
-    assert scenario.rotors.speed == pytest.approx(models.ROTOR_SPEEDS[0], rel=1e-15)
+    assert scenario.rotors.speed == pytest.approx(ROTOR_SPEEDS[0], rel=1e-15)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -86,7 +90,7 @@ def test_spinning_rotors_angular_momentum_is_documented_value(seed):
     context = plant.CreateDefaultContext()
     X_WB = _random_configuration(manip, context, rng)
     v = np.zeros(plant.num_velocities())
-    v[manip.rotor_velocity_indices] = models.ROTOR_SPEEDS
+    v[manip.rotor_velocity_indices] = ROTOR_SPEEDS
     plant.SetVelocities(context, v)
     R_BW = X_WB.rotation().inverse()
     for point in (X_WB.translation(), rng.uniform(-3, 3, 3)):
@@ -94,7 +98,7 @@ def test_spinning_rotors_angular_momentum_is_documented_value(seed):
         np.testing.assert_allclose(R_BW @ h.rotational(), [0.0, NET_MOMENTUM, 0.0], atol=1e-12)
         np.testing.assert_allclose(h.translational(), np.zeros(3), atol=1e-12)
     # Each rotor alone: 0.12 * 26 pi = 9.80 N m s along its mast, tilted 12.5 deg outward.
-    for joint, speed, side in zip(manip.rotor_joints, models.ROTOR_SPEEDS, (1, -1)):
+    for joint, speed, side in zip(manip.rotor_joints, ROTOR_SPEEDS, (1, -1)):
         rotor = joint.child_body()
         X_WR = rotor.EvalPoseInWorld(context)
         M_RRo_W = rotor.CalcSpatialInertiaInBodyFrame(context).ReExpress(X_WR.rotation())
@@ -116,7 +120,7 @@ def test_angular_momentum_conserved_with_rotors_spinning_and_body_tumbling():
     _random_configuration(manip, context, rng)
     v = np.zeros(plant.num_velocities())
     v[manip.base_velocity_indices] = [0.8, -0.6, 1.1, 0.3, -0.1, 0.2]  # tumbling
-    v[manip.rotor_velocity_indices] = models.ROTOR_SPEEDS
+    v[manip.rotor_velocity_indices] = ROTOR_SPEEDS
     v[manip.arm_velocity_indices] = rng.uniform(-0.5, 0.5, 7)
     plant.SetVelocities(context, v)
     for port in (plant.get_actuation_input_port(manip.helicopter),
