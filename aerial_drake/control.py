@@ -13,6 +13,10 @@ Choices where the paper is silent (also in ``docs/control.md``):
   acceleration from the closed loop (16), as the paper suggests.
 - ``V1`` of (25) uses ``k_R / 2 tr(E3 - R_d^T R_b)`` (Lee et al.'s ``k_R Psi``; the paper's
   print drops the 1/2, without which ``dV1/dt`` has an uncancelled ``e_R . w~`` term).
+
+Scalar types: the law runs unchanged on float arrays and on numpy object arrays of AutoDiffXd
+(a :class:`Decomposition` from an AutoDiffXd plant, for ``Linearize``); the assumption checks
+and the diagnostics' norms and angles are then taken on the values.
 """
 
 
@@ -21,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from aerial_drake.decoupling import Decomposition, cross, vee
+from aerial_drake.decoupling import Decomposition, cross, inv, value_of, vee
 
 _E3 = np.eye(3)
 _e3 = np.array([0.0, 0.0, 1.0])
@@ -47,10 +51,11 @@ class Gains:
     # Task velocity gain K_z, diagonal.
     K_z: list[float] = field(default_factory=list)
     # The small constants gamma_1, gamma_2 of the Lyapunov function V1 (25); they do not
-    # enter the control law. Defaults satisfy the CoM and attitude cross-term conditions for
-    # Table II's gains (docs/control.md).
+    # enter the control law. For Table II's gains gamma_1 = 20 meets Lee et al.'s CoM
+    # conditions (< 82) and gamma_2 = 0.4 their attitude bound (< 0.44); the condition that
+    # couples the two cannot be met with Table II's gains (docs/analysis.md, section 5).
     lyapunov_gamma1: float = 20.0
-    lyapunov_gamma2: float = 2.0
+    lyapunov_gamma2: float = 0.4
 
     def validate(self, n_task: int = 7, prefix: str = "gains") -> "Gains":
         """Raise ValueError naming the field if a gain is missing, of the wrong size, or not
@@ -139,9 +144,14 @@ class ControlOutput:
     J3: np.ndarray
 
 
+def _norm(a):
+    """Euclidean norm of a float or AutoDiffXd (object) vector."""
+    return np.sqrt(a @ a) if a.dtype == object else np.linalg.norm(a)
+
+
 def unit_vector_derivatives(a, a_dot, a_ddot):
     """``b = a/|a|`` and its first two time derivatives."""
-    n = np.linalg.norm(a)
+    n = _norm(a)
     b = a / n
     ad_b = a_dot @ b
     b_dot = (a_dot - b * ad_b) / n
@@ -164,11 +174,12 @@ def desired_attitude(f_d, f_d_dot, f_d_ddot, b1d):
     R_d_ddot = np.column_stack([
         cross(b2_ddot, b3) + 2.0 * cross(b2_dot, b3_dot) + cross(b2, b3_ddot),
         b2_ddot, b3_ddot])
-    return R_d, R_d_dot, R_d_ddot, np.linalg.norm(c)
+    return R_d, R_d_dot, R_d_ddot, _norm(c)
 
 
 def rotation_angle(R: np.ndarray) -> float:
     """Geodesic angle of a rotation matrix (rad)."""
+    R = value_of(R)
     return float(np.arccos(np.clip(0.5 * (np.trace(R) - 1.0), -1.0, 1.0)))
 
 
@@ -193,7 +204,7 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
     x_t = d.p_WG - x_d
     x_t_dot = xg_dot - xd1
     f_d = m * xd2 + m * ge3 - K.K_x * x_t - K.D_x * x_t_dot  # (10)
-    f_d_norm = float(np.linalg.norm(f_d))
+    f_d_norm = float(np.linalg.norm(value_of(f_d)))
     if not f_d_norm > f_d_limit:
         raise AssumptionViolation(
             f"Assumption 2 violated: the desired thrust vanishes, |f_d| = {f_d_norm:.3g} N "
@@ -228,7 +239,7 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
     J_dot = (task.J_y_dot - J @ d.T_dot) @ d.T_inv  # d/dt T^{-1} = -T^{-1} T_dot T^{-1}
     J1, J2, J3 = J[:, :3], J[:, 3:6], J[:, 6:]
     J1_dot, J2_dot, J3_dot = J_dot[:, :3], J_dot[:, 3:6], J_dot[:, 6:]
-    sigma = np.linalg.svd(J3, compute_uv=False)
+    sigma = np.linalg.svd(value_of(J3), compute_uv=False)
     sigma_min = float(sigma[-1])
     if not sigma_min > sigma_min_J3_limit:
         raise AssumptionViolation(
@@ -242,7 +253,7 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
     z_t = z - z_d  # (18)
     z_d_dot = (ref.y_d_ddot - J1 @ xg_dd - J1_dot @ xg_dot - J2 @ w_b_dot - J2_dot @ w_b
                - K.K_y * y_t_dot)  # (20)
-    J3_inv = np.linalg.inv(J3)
+    J3_inv = inv(J3)
     Lambda33, Gamma33 = d.Lambda[6:, 6:], d.Gamma[6:, 6:]
     Lambda_z = J3_inv.T @ Lambda33 @ J3_inv  # (19)
     Gamma_z = J3_inv.T @ (Gamma33 - Lambda33 @ J3_inv @ J3_dot) @ J3_inv
@@ -263,10 +274,12 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
     diagnostics = np.concatenate([
         x_t, x_t_dot, e_R, w_t, y_t, z_t,
         [sigma_min, f_d_norm, V1, V_task, V1 + V_task,
-         np.linalg.norm(x_t), rotation_angle(R_d.T @ R), np.linalg.norm(y_t[:3]),
+         np.linalg.norm(value_of(x_t)), rotation_angle(R_d.T @ R),
+         np.linalg.norm(value_of(y_t[:3])),
          rotation_angle(R_err)],
         force_b[:2]])
-    return ControlOutput(f=float(force_b[2]), mu=mu, tau=tau, diagnostics=diagnostics,
+    f = force_b[2] if force_b.dtype == object else float(force_b[2])
+    return ControlOutput(f=f, mu=mu, tau=tau, diagnostics=diagnostics,
                          u_prime=u_prime, R_d=R_d, w_d=w_d, w_d_dot=w_d_dot,
                          Lambda_z=Lambda_z, Gamma_z=Gamma_z, J3=J3)
 

@@ -1,17 +1,26 @@
-"""The inertially decoupled controller of Section III as a Drake LeafSystem."""
+"""The inertially decoupled controller of Section III as a Drake LeafSystem.
+
+``DecoupledController`` is the double instantiation of the scalar-convertible template
+``DecoupledController_`` (Drake's ``TemplateSystem``): ``DecoupledController_[AutoDiffXd]`` runs
+the same law on an AutoDiffXd copy of the model plant, so a diagram holding the controller can
+be ``Linearize``d (see :mod:`aerial_drake.analysis`).
+"""
 
 from __future__ import annotations
 
 import numpy as np
+from pydrake.autodiffutils import AutoDiffXd, ExtractGradient
 from pydrake.common.value import AbstractValue
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import Frame
-from pydrake.systems.framework import BasicVector, Context, LeafSystem, ValueProducer
+from pydrake.systems.framework import (
+    BasicVector, Context, LeafSystem, LeafSystem_, ValueProducer)
+from pydrake.systems.scalar_conversion import TemplateSystem
 
 from aerial_drake.control import (
     DIAGNOSTICS_SIZE, AssumptionViolation, ControlOutput, GainMatrices, Gains, Reference,
     TaskKinematics, compute_control)
-from aerial_drake.decoupling import DecoupledDynamics
+from aerial_drake.decoupling import DecoupledDynamics, value_of
 from aerial_drake.reference import (
     COM_REFERENCE_SIZE, HEADING_REFERENCE_SIZE, TASK_REFERENCE_SIZE, unpack_com_reference,
     unpack_heading_reference, unpack_task_reference)
@@ -24,11 +33,12 @@ COMMAND_BASE = slice(0, 4)
 COMMAND_JOINT_TORQUES = slice(4, None)
 
 
-class DecoupledController(LeafSystem):
+class _DecoupledControllerBase:
     """The law (10)-(22) on the controller's own model of the plant.
 
     Input ports:
-        - ``state``: the model plant's state ``[q; v]`` (quaternion floating base, 7 arm joints).
+        - ``state``: the model plant's state ``[q; v]`` (its floating base, quaternion or rpy,
+          then 7 arm joints).
         - ``com_reference`` (15), ``task_reference`` (27), ``heading_reference`` (9): as
           produced by :class:`aerial_drake.reference.ReferenceGenerator`.
 
@@ -41,20 +51,22 @@ class DecoupledController(LeafSystem):
     :mod:`aerial_drake.diagram`).
 
     Args:
-        plant: the controller's model (a finalized, double, continuous MultibodyPlant; usually
-            ``models.make_plant("rigid").plant``), not the simulated plant.
+        plant: the controller's model (a finalized, continuous MultibodyPlant of the system's
+            scalar type; usually ``models.make_plant("rigid").plant``), not the simulated
+            plant. Scalar conversion converts it (``ToScalarType``).
         end_effector_frame: the task frame E on ``plant``.
         q3_joint_velocity_index: index in v of the joint whose angle is the 7th task coordinate.
         gains: Table II gains; validated here (a ValueError names a bad field).
         sigma_min_J3_limit, f_d_limit: thresholds of the Assumption 1 and 2 checks.
     """
 
-    def __init__(self, plant: MultibodyPlant, end_effector_frame: Frame,
-                 q3_joint_velocity_index: int, q3_joint_position_index: int, gains: Gains, *,
-                 sigma_min_J3_limit: float = 1e-3, f_d_limit: float = 1.0):
-        super().__init__()
+    def _setup(self, plant: MultibodyPlant, end_effector_frame: Frame,
+               q3_joint_velocity_index: int, q3_joint_position_index: int, gains: Gains, *,
+               sigma_min_J3_limit: float = 1e-3, f_d_limit: float = 1.0):
         self._plant = plant
+        self._gains = gains
         self._dynamics = DecoupledDynamics(plant)
+        self._dtype = float if isinstance(plant, MultibodyPlant) else object
         nv = plant.num_velocities()
         self._n = nv - 6
         self._K = GainMatrices.from_gains(gains, n_task=self._n)
@@ -105,14 +117,14 @@ class DecoupledController(LeafSystem):
         d = self._dynamics.compute(ctx)
         J6, J6_dot = self._dynamics.frame_jacobian(d, self._frame)
         nv = plant.num_velocities()
-        J_y = np.zeros((7, nv))
+        J_y = np.zeros((7, nv), dtype=self._dtype)
         J_y[:6] = J6
         J_y[6, self._q3_v] = 1.0
-        J_y_dot = np.zeros((7, nv))
+        J_y_dot = np.zeros((7, nv), dtype=self._dtype)
         J_y_dot[:6] = J6_dot
         X_WE = self._frame.CalcPoseInWorld(ctx)
         kin = TaskKinematics(p_WE=X_WE.translation(), R_WE=X_WE.rotation().matrix(),
-                             q3=float(x[self._q3_q]), J_y=J_y, J_y_dot=J_y_dot)
+                             q3=x[self._q3_q], J_y=J_y, J_y_dot=J_y_dot)
         t = unpack_task_reference(task)
         ref = Reference(
             com=unpack_com_reference(com), p_ed=t.p_ed, R_ed=t.R_ed, q3d=t.q3d,
@@ -124,19 +136,25 @@ class DecoupledController(LeafSystem):
 
     def _calc_solution(self, context: Context, value: AbstractValue) -> None:
         x = self._state_port.Eval(context)
-        if not np.all(np.isfinite(x)):
+        if not np.all(np.isfinite(value_of(x))):
             raise FloatingPointError(
                 f"t = {context.get_time():.4f} s: the plant state is not finite (the simulation "
                 "diverged before the controller could act)")
+        com, task = self._com_port.Eval(context), self._task_port.Eval(context)
+        heading = self._heading_port.Eval(context)
+        if self._dtype == object:
+            com, task, heading = (_reference_values(r) for r in (com, task, heading))
         try:
-            out = self.solve(x, self._com_port.Eval(context), self._task_port.Eval(context),
-                             self._heading_port.Eval(context))
+            out = self.solve(x, com, task, heading)
         except AssumptionViolation as err:
             raise AssumptionViolation(f"t = {context.get_time():.4f} s: {err}") from None
         value.set_value(out)
 
     def _calc_command(self, context: Context, output: BasicVector) -> None:
         out: ControlOutput = self._solution.Eval(context)
+        if self._dtype == object:
+            output.SetFromVector(np.concatenate([[out.f], out.mu, out.tau]))
+            return
         cmd = output.get_mutable_value()
         cmd[0] = out.f
         cmd[1:4] = out.mu
@@ -144,3 +162,74 @@ class DecoupledController(LeafSystem):
 
     def _calc_diagnostics(self, context: Context, output: BasicVector) -> None:
         output.SetFromVector(self._solution.Eval(context).diagnostics)
+
+
+def _reference_values(reference: np.ndarray) -> np.ndarray:
+    """An AutoDiffXd reference input's values. The law reads its references as floats, so a
+    reference that carries derivatives (linearising with respect to it) is refused."""
+    if np.any(ExtractGradient(reference)):
+        raise NotImplementedError(
+            "DecoupledController_[AutoDiffXd] differentiates with respect to the state only: "
+            "its reference inputs must be constant (no derivatives)")
+    return value_of(reference)
+
+
+@TemplateSystem.define("DecoupledController_", T_list=(float, AutoDiffXd))
+def DecoupledController_(T):
+    """The controller for scalar type ``T`` (float or AutoDiffXd); a float controller converts
+    to AutoDiffXd (``ToAutoDiffXd``, or inside ``Linearize``) with its model plant."""
+
+    class Impl(_DecoupledControllerBase, LeafSystem_[T]):
+        __doc__ = _DecoupledControllerBase.__doc__
+
+        def _construct(self, plant, end_effector_frame, q3_joint_velocity_index,
+                       q3_joint_position_index, gains, *, sigma_min_J3_limit=1e-3,
+                       f_d_limit=1.0, converter=None):
+            LeafSystem_[T].__init__(self, converter)
+            self._setup(plant, end_effector_frame, q3_joint_velocity_index,
+                        q3_joint_position_index, gains, sigma_min_J3_limit=sigma_min_J3_limit,
+                        f_d_limit=f_d_limit)
+
+        def _construct_copy(self, other, converter=None):
+            plant = other._plant.ToScalarType[T]()
+            Impl._construct(self, plant, plant.get_frame(other._frame.index()), other._q3_v,
+                            other._q3_q, other._gains, **other._limits, converter=converter)
+
+    return Impl
+
+
+#: The controller on a double plant (the simulation's); ``DecoupledController_[AutoDiffXd]``
+#: is its AutoDiffXd instantiation.
+DecoupledController = DecoupledController_[None]
+
+
+class ZeroController(LeafSystem):
+    """The ports of :class:`DecoupledController` with all-zero outputs: a benchmark baseline
+    (the plant falls; only the cost of everything but the control law is measured)."""
+
+    def __init__(self, plant: MultibodyPlant, end_effector_frame: Frame,
+                 q3_joint_velocity_index: int, q3_joint_position_index: int, gains: Gains,
+                 **unused):
+        super().__init__()
+        nv = plant.num_velocities()
+        self.evaluations = 0
+        self._state_port = self.DeclareVectorInputPort(
+            "state", plant.num_positions() + nv)
+        self.DeclareVectorInputPort("com_reference", COM_REFERENCE_SIZE)
+        self.DeclareVectorInputPort("task_reference", TASK_REFERENCE_SIZE)
+        self.DeclareVectorInputPort("heading_reference", HEADING_REFERENCE_SIZE)
+        self.DeclareVectorOutputPort("command", 4 + nv - 6, self._calc_zero)
+        self.DeclareVectorOutputPort("diagnostics", DIAGNOSTICS_SIZE, self._calc_zero)
+
+    def get_state_input_port(self):
+        return self._state_port
+
+    def get_command_output_port(self):
+        return self.GetOutputPort("command")
+
+    def get_diagnostics_output_port(self):
+        return self.GetOutputPort("diagnostics")
+
+    def _calc_zero(self, context: Context, output: BasicVector) -> None:
+        self.evaluations += 1
+        output.SetZero()

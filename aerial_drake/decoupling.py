@@ -17,6 +17,10 @@ Use :class:`DecoupledDynamics` (built once per plant) and call :meth:`DecoupledD
 once per state: it returns a :class:`Decomposition` holding every quantity, each computed once.
 Works for a plant whose first six velocities are a free base (quaternion or RPY floating joint)
 and whose other velocities are 1-DoF joints ordered parent before child, as Drake orders them.
+
+Scalar types: a ``MultibodyPlant`` (double) gives float arrays; a ``MultibodyPlant_[AutoDiffXd]``
+gives numpy object arrays of AutoDiffXd through the same code (for ``Linearize``). The few
+operations numpy cannot do on object arrays go through :func:`inv` and :func:`solve`.
 """
 
 from __future__ import annotations
@@ -24,6 +28,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from pydrake.autodiffutils import ExtractValue
+import pydrake.math
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import BodyIndex, Frame, JacobianWrtVariable, RigidBody
 from pydrake.systems.framework import Context
@@ -47,6 +53,24 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
                      a[0] * b[1] - a[1] * b[0]])
 
 
+def inv(A: np.ndarray) -> np.ndarray:
+    """Matrix inverse for float arrays (numpy) and AutoDiffXd object arrays (pydrake.math)."""
+    return pydrake.math.inv(A) if A.dtype == object else np.linalg.inv(A)
+
+
+def solve(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """``A^{-1} B`` for float arrays (numpy) and AutoDiffXd object arrays."""
+    if A.dtype == object or B.dtype == object:
+        return pydrake.math.inv(A) @ B
+    return np.linalg.solve(A, B)
+
+
+def value_of(a) -> np.ndarray:
+    """The float values of a float or AutoDiffXd (object) array or scalar."""
+    a = np.asarray(a)
+    return ExtractValue(a).reshape(a.shape) if a.dtype == object else a
+
+
 def _cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Cross products of 3-vectors stacked along axis -2: a, b of shape (..., 3, k)."""
     a0, a1, a2 = a[..., 0, :], a[..., 1, :], a[..., 2, :]
@@ -56,7 +80,7 @@ def _cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def _hat_batch(a: np.ndarray) -> np.ndarray:
     """hat() of each row of ``a`` (k, 3) -> (k, 3, 3)."""
-    out = np.zeros(a.shape[:-1] + (3, 3))
+    out = np.zeros(a.shape[:-1] + (3, 3), dtype=a.dtype)
     out[..., 0, 1], out[..., 0, 2] = -a[..., 2], a[..., 1]
     out[..., 1, 0], out[..., 1, 2] = a[..., 2], -a[..., 0]
     out[..., 2, 0], out[..., 2, 1] = -a[..., 1], a[..., 0]
@@ -65,7 +89,7 @@ def _hat_batch(a: np.ndarray) -> np.ndarray:
 
 def _crm_batch(V: np.ndarray) -> np.ndarray:
     """Spatial motion cross product matrices crm(V) = [[w x, 0], [v x, w x]], V = [w; v]."""
-    out = np.zeros(V.shape[:-1] + (6, 6))
+    out = np.zeros(V.shape[:-1] + (6, 6), dtype=V.dtype)
     W = _hat_batch(V[..., :3])
     out[..., :3, :3] = W
     out[..., 3:, 3:] = W
@@ -163,7 +187,8 @@ class DecoupledDynamics:
     """Computes :class:`Decomposition` for one plant; construct once, call ``compute`` per state.
 
     Args:
-        plant: a finalized MultibodyPlant (double) whose velocities start with the base's six.
+        plant: a finalized MultibodyPlant (double or AutoDiffXd) whose velocities start with
+            the base's six.
         base_body: the floating base; defaults to the plant's only floating base body, or the
             body named "helicopter".
     """
@@ -193,15 +218,18 @@ class DecoupledDynamics:
             raise ValueError(f"base body '{self.base_body.name()}' must have mass")
         self._base_pos = self.bodies.index(self.base_body)
         default_context = plant.CreateDefaultContext()
+        # Arrays of the plant's scalar: float, or object for AutoDiffXd.
+        self._dtype = float if isinstance(plant, MultibodyPlant) else object
         # Constant spatial inertias in each body's frame about its origin, [w; v] ordering.
         self._I = np.array([
-            b.CalcSpatialInertiaInBodyFrame(default_context).CopyToFullMatrix6()
+            value_of(b.CalcSpatialInertiaInBodyFrame(default_context).CopyToFullMatrix6())
             for b in self.bodies
         ])
         self._mass = np.array([b.default_mass() for b in self.bodies])
         self.m = float(self._mass.sum())
         self._com_B = np.array([
-            b.CalcSpatialInertiaInBodyFrame(default_context).get_com() for b in self.bodies
+            value_of(b.CalcSpatialInertiaInBodyFrame(default_context).get_com())
+            for b in self.bodies
         ])
         # P_i = [-(c_i x), E3] maps a body spatial velocity to its CoM's translational velocity.
         self._P = np.concatenate([-_hat_batch(self._com_B), np.broadcast_to(_E3, (len(self.bodies), 3, 3))],
@@ -218,13 +246,13 @@ class DecoupledDynamics:
 
     def compute(self, context: Context) -> Decomposition:
         """All of Section II's quantities at the state in ``context``."""
-        plant, nv, n = self.plant, self.nv, self.n
+        plant, nv, n, dtype = self.plant, self.nv, self.n, self._dtype
         v = plant.GetVelocities(context)
         nb = len(self.bodies)
         kV = JacobianWrtVariable.kV
-        J = np.empty((nb, 6, nv))
-        R_all = np.empty((nb, 3, 3))
-        p_all = np.empty((nb, 3))
+        J = np.empty((nb, 6, nv), dtype=dtype)
+        R_all = np.empty((nb, 3, 3), dtype=dtype)
+        p_all = np.empty((nb, 3), dtype=dtype)
         for i, frame in enumerate(self._frames):
             J[i] = plant.CalcJacobianSpatialVelocity(context, kV, frame, np.zeros(3),
                                                      self._world, frame)
@@ -240,7 +268,7 @@ class DecoupledDynamics:
         crmV = _crm_batch(V)
         crfV = -np.swapaxes(crmV, 1, 2)
         h = np.einsum("bij,bj->bi", I, V)
-        Hbar = np.zeros((nb, 6, 6))
+        Hbar = np.zeros((nb, 6, 6), dtype=dtype)
         kx, px = _hat_batch(h[:, :3]), _hat_batch(h[:, 3:])
         Hbar[:, :3, :3], Hbar[:, :3, 3:], Hbar[:, 3:, :3] = -kx, -px, -px
         inner = I @ J_dot + 0.5 * (crfV @ I + I @ crmV + Hbar) @ J
@@ -260,34 +288,34 @@ class DecoupledDynamics:
 
         RT = R.T
         w_b = RT @ v[:3]
-        J_bw = np.zeros((3, nv))
+        J_bw = np.zeros((3, nv), dtype=dtype)
         J_bw[:, :3] = RT
-        J_bw_dot = np.zeros((3, nv))
+        J_bw_dot = np.zeros((3, nv), dtype=dtype)
         J_bw_dot[:, :3] = -hat(w_b) @ RT
-        J_b = np.zeros((6, nv))
+        J_b = np.zeros((6, nv), dtype=dtype)
         J_b[:3, 3:6] = RT
         J_b[3:, :3] = RT
 
         # Closed-form null-space base: Z = [0, -A_q^T, E_n] (design notes, section 2).
         A_q, A_q_dot = J_g[:, 6:], J_g_dot[:, 6:]
-        Z = np.zeros((n, nv))
+        Z = np.zeros((n, nv), dtype=dtype)
         Z[:, 3:6] = -A_q.T
         Z[:, 6:] = np.eye(n)
-        Z_dot = np.zeros((n, nv))
+        Z_dot = np.zeros((n, nv), dtype=dtype)
         Z_dot[:, 3:6] = -A_q_dot.T
 
         M_dot = C + C.T
         ZM = Z @ M
         ZMZ = ZM @ Z.T
-        N = np.linalg.solve(ZMZ, ZM)  # (4)
+        N = solve(ZMZ, ZM)  # (4)
         ZdM = Z_dot @ M
         ZMd = Z @ M_dot
         ZMZ_dot = ZdM @ Z.T + ZMd @ Z.T + ZM @ Z_dot.T
-        N_dot = np.linalg.solve(ZMZ, ZdM + ZMd - ZMZ_dot @ N)
+        N_dot = solve(ZMZ, ZdM + ZMd - ZMZ_dot @ N)
 
         T = np.vstack([J_g, J_bw, N])  # (3)
         T_dot = np.vstack([J_g_dot, J_bw_dot, N_dot])
-        T_inv = np.linalg.inv(T)
+        T_inv = inv(T)
         Lambda = T_inv.T @ M @ T_inv
         Gamma = T_inv.T @ (C - M @ T_inv @ T_dot) @ T_inv
         xi = T @ v

@@ -28,9 +28,9 @@ from pydrake.systems.controllers import PidController
 
 from aerial_drake.actuators import (
     PointWrenchApplier, free_body_wrench_map, lag_time_constant, make_base_actuator)
-from aerial_drake.controller import DecoupledController
+from aerial_drake.controller import DecoupledController, ZeroController
 from aerial_drake.disturbances import add_wrench_source
-from aerial_drake.models import AerialManipulator, add_to_builder, make_plant
+from aerial_drake.models import ROTOR_DIRECTIONS, AerialManipulator, add_to_builder, make_plant
 from aerial_drake.reference import ReferenceGenerator
 from aerial_drake.scenarios import Scenario
 
@@ -78,8 +78,14 @@ def _joint_index(j: int):
     return JointIndex(j)
 
 
-def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop") -> ClosedLoop:
-    """The closed loop of ``scenario`` as one Diagram with exported disturbance inputs."""
+def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
+                      zero_controller: bool = False) -> ClosedLoop:
+    """The closed loop of ``scenario`` as one Diagram with exported disturbance inputs.
+
+    ``zero_controller`` puts :class:`~aerial_drake.controller.ZeroController` (same ports,
+    zero outputs) in the controller's place: the benchmarks' baseline, which costs the plant,
+    the reference and the logging but no control law.
+    """
     builder = DiagramBuilder()
     sim = add_to_builder(builder, scenario.plant_variant, time_step=0.0)
     plant = sim.plant
@@ -94,7 +100,8 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop") -> Close
 
     reference = builder.AddSystem(ReferenceGenerator(scenario.trajectory))
     reference.set_name("reference")
-    controller = builder.AddSystem(DecoupledController(
+    controller_type = ZeroController if zero_controller else DecoupledController
+    controller = builder.AddSystem(controller_type(
         model.plant, model.end_effector_frame,
         q3_joint_velocity_index=model.arm_joints[2].velocity_start(),
         q3_joint_position_index=model.arm_joints[2].position_start(),
@@ -208,7 +215,7 @@ def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: 
     pid = builder.AddSystem(PidController(P, np.eye(k), np.zeros(k), np.zeros(k),
                                           np.full(k, gain)))
     pid.set_name("rotor_drive")
-    speeds = scenario.rotors.speed * np.array([1.0, -1.0])[:k]
+    speeds = scenario.rotors.speed * np.array(ROTOR_DIRECTIONS)[:k]
     desired = builder.AddSystem(ConstantVectorSource(np.concatenate([np.zeros(k), speeds])))
     desired.set_name("rotor_speed")
     builder.Connect(plant.get_state_output_port(), pid.get_input_port_estimated_state())
@@ -231,6 +238,7 @@ LOGGED_PORTS = ("plant_state", "command", "applied_command", "diagnostics", "com
 
 
 def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = None,
+                     zero_controller: bool = False,
                      ) -> tuple[DiagramBuilder, ClosedLoop, dict[str, VectorLogSink]]:
     """Add the closed loop, the scenario's disturbance sources and loggers to ``builder``.
 
@@ -238,7 +246,7 @@ def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = Non
     the loggers by port name.
     """
     builder = builder or DiagramBuilder()
-    loop = build_closed_loop(scenario)
+    loop = build_closed_loop(scenario, zero_controller=zero_controller)
     builder.AddSystem(loop.diagram)
     for target, port in (("helicopter", "helicopter_wrench"),
                          ("end_effector", "end_effector_wrench")):

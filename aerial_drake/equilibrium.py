@@ -170,5 +170,5 @@ def nominal_positions(manip: AerialManipulator, p_WB: np.ndarray, R_WB: np.ndarr
 
 def _set_rpy_base(manip: AerialManipulator, ctx, p_WB, R_WB) -> None:
     joint = manip.base_joint
-    joint.set_translation(ctx, p_WB)
+    joint.SetTranslation(ctx, p_WB)
     joint.set_angles(ctx, _rpy(R_WB))
