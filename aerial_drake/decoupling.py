@@ -329,11 +329,11 @@ class DecoupledDynamics:
                               R_all: np.ndarray) -> np.ndarray:
         """d/dt of each body-frame Jacobian, in closed form (design notes, section 3)."""
         # 1-DoF joint column k: crm(J[:, k]) sum_{m > k} J[:, m] v_m (parent-before-child order).
-        Jv = J * v  # columns scaled by their velocity
-        suffix = np.cumsum(Jv[:, :, ::-1], axis=2)[:, :, ::-1]
-        after = np.zeros_like(J)
-        after[:, :, :-1] = suffix[:, :, 1:]
-        J_dot = _crm_times(J, after)
+        J_dot = np.empty_like(J)
+        # Only the joints' columns (6:): the free joint's are set below.
+        Jv = J[:, :, 6:] * v[6:]  # columns scaled by their velocity
+        after = np.cumsum(Jv[:, :, ::-1], axis=2)[:, :, ::-1] - Jv  # sum over m > k
+        J_dot[:, :, 6:] = _crm_times(J[:, :, 6:], after)
         # Free joint's six columns: -crm(V_i) J_i[:, free], plus [0; R_BiW (v_WBo x)] on the
         # angular ones.
         J_dot[:, :, :6] = -_crm_batch(V) @ J[:, :, :6]
