@@ -33,7 +33,20 @@ COMMAND_BASE = slice(0, 4)
 COMMAND_JOINT_TORQUES = slice(4, None)
 
 
-class _DecoupledControllerBase:
+class _ControllerPorts:
+    """Port accessors shared by the controllers (same port names and sizes)."""
+
+    def get_state_input_port(self):
+        return self._state_port
+
+    def get_command_output_port(self):
+        return self.GetOutputPort("command")
+
+    def get_diagnostics_output_port(self):
+        return self.GetOutputPort("diagnostics")
+
+
+class _DecoupledControllerBase(_ControllerPorts):
     """The law (10)-(22) on the controller's own model of the plant.
 
     Input ports:
@@ -100,14 +113,6 @@ class _DecoupledControllerBase:
     def model_plant(self) -> MultibodyPlant:
         return self._plant
 
-    def get_state_input_port(self):
-        return self._state_port
-
-    def get_command_output_port(self):
-        return self.GetOutputPort("command")
-
-    def get_diagnostics_output_port(self):
-        return self.GetOutputPort("diagnostics")
 
     def solve(self, x: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
               ) -> ControlOutput:
@@ -203,7 +208,7 @@ def DecoupledController_(T):
 DecoupledController = DecoupledController_[None]
 
 
-class ZeroController(LeafSystem):
+class ZeroController(_ControllerPorts, LeafSystem):
     """The ports of :class:`DecoupledController` with all-zero outputs: a benchmark baseline
     (the plant falls; only the cost of everything but the control law is measured)."""
 
@@ -220,15 +225,6 @@ class ZeroController(LeafSystem):
         self.DeclareVectorInputPort("heading_reference", HEADING_REFERENCE_SIZE)
         self.DeclareVectorOutputPort("command", 4 + nv - 6, self._calc_zero)
         self.DeclareVectorOutputPort("diagnostics", DIAGNOSTICS_SIZE, self._calc_zero)
-
-    def get_state_input_port(self):
-        return self._state_port
-
-    def get_command_output_port(self):
-        return self.GetOutputPort("command")
-
-    def get_diagnostics_output_port(self):
-        return self.GetOutputPort("diagnostics")
 
     def _calc_zero(self, context: Context, output: BasicVector) -> None:
         self.evaluations += 1
