@@ -6,6 +6,7 @@ feedback with the same integrator (its stages see the controller's continuous ou
 """
 
 import json
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -30,10 +31,12 @@ def max_after(result, name, t0, t1=np.inf):
 
 
 @pytest.fixture(scope="module")
-def nominal(tmp_path_factory):
-    """The paper's nominal scenario, 15 s, with both disturbance windows."""
-    out = tmp_path_factory.mktemp("nominal")
-    return run_scenario(load_scenario("nominal"), out_dir=out, progress=False)
+def nominal(full_paper):
+    """The paper's nominal scenario, 15 s, with both disturbance windows (from the shared
+    paper run, conftest.py)."""
+    run = full_paper.runs["nominal"]
+    return SimpleNamespace(log=run.log, metrics=run.metrics,
+                           out_dir=full_paper.out_dir / "nominal")
 
 
 @pytest.fixture(scope="module")

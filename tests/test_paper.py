@@ -1,5 +1,5 @@
 """Section IV end to end: the disturbed scenario, `aerial-drake run paper`, its metrics and
-figures. The full 15 s runs are in the ``slow`` tests at the bottom."""
+figures. The full 15 s runs (one shared paper run, conftest.py) are at the bottom."""
 
 import contextlib
 import dataclasses
@@ -231,19 +231,13 @@ def test_a_failing_run_is_reported_and_still_drawn(tmp_path, monkeypatch):
 
 
 # --- The full runs (15 s each) ----------------------------------------------------------------
-@pytest.fixture(scope="module")
-def full_paper(tmp_path_factory):
-    out = tmp_path_factory.mktemp("paper")
-    result = dut.run_paper(out, progress=False)
-    assert result.completed, result.failures
-    return result
+# full_paper: the 15 s paper run, shared with test_closed_loop (conftest.py).
 
 
 def _diag(run, name):
     return run.diagnostic(name)[:, 0]
 
 
-@pytest.mark.slow
 def test_nominal_end_effector_barely_feels_the_force_on_the_helicopter(full_paper):
     """The paper's claim (Figs. 3, 4): in the 4-5 s window the end-effector position error
     grows far less than the CoM error."""
@@ -254,13 +248,11 @@ def test_nominal_end_effector_barely_feels_the_force_on_the_helicopter(full_pape
     assert helicopter["com_error_peak_m"] > 0.05  # the force does move the CoM
 
 
-@pytest.mark.slow
 def test_nominal_inputs_saturate_only_in_the_first_half_second(full_paper):
     late = full_paper.runs["nominal"].metrics["saturated_s_after_0.5s"]
     assert late == {name: 0.0 for name in INPUT_NAMES}
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("name", ["nominal", "disturbed"])
 def test_runs_stay_stable_and_reconverge_after_each_window(full_paper, name):
     """Bounded errors throughout; at the end of each quiet phase (before a window, and the
@@ -288,7 +280,6 @@ def test_runs_stay_stable_and_reconverge_after_each_window(full_paper, name):
             assert tail < max(0.1 * peak, floors[key]), (key, a, b, tail, peak)
 
 
-@pytest.mark.slow
 def test_disturbed_rotors_keep_their_speed(full_paper):
     rotors = full_paper.runs["disturbed"].metrics["rotors"]
     for side in ("left", "right"):
@@ -296,7 +287,6 @@ def test_disturbed_rotors_keep_their_speed(full_paper):
         assert rotors[side]["drive_torque_max_abs_N_m"] < 100.0
 
 
-@pytest.mark.slow
 def test_full_figures_written(full_paper):
     names = {p.name for p in full_paper.figures}
     assert names == {f"{n}.{ext}" for n in plots.FIGURE_NAMES for ext in plots.FORMATS}
