@@ -1,4 +1,4 @@
-"""Command line: ``aerial-drake run SCENARIO``, ``aerial-drake info``.
+"""Command line: ``aerial-drake run SCENARIO``, ``aerial-drake info``, ``aerial-drake analyze``.
 
 ``SCENARIO`` is a shipped scenario name (``nominal``) or a path to a YAML file.
 """
@@ -61,29 +61,61 @@ def _print_summary(result) -> None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from aerial_drake.runner import SimulationFailed, run_scenario
+    from aerial_drake.runner import SimulationFailed, SimulationInterrupted, run_scenario
     from aerial_drake.scenarios import ScenarioError, load_scenario
 
+    if args.scenario == "paper":  # both of Section IV's runs and Figs. 3-6 (aerial_drake.paper)
+        from aerial_drake.paper import cli_run
+        return cli_run(args)
     overrides = {}
     if args.duration is not None:
         overrides["duration"] = args.duration
     try:
         scenario = load_scenario(args.scenario, overrides=overrides)
+        if args.seed is not None:
+            from aerial_drake.paper import perturb_initial
+            scenario = perturb_initial(scenario, args.seed)
     except ScenarioError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
     out = Path(args.out) / scenario.name
+    view = None
+    if args.meshcat or args.record:  # aerial_drake.visualization
+        from aerial_drake.visualization import MeshcatPortInUse, MeshcatView
+        try:
+            port = args.meshcat_port
+            if port is None and not args.meshcat:
+                port = 0  # recording only: leave 7000-7099 to live views
+            view = MeshcatView(scenario, live=args.meshcat, host=args.meshcat_host, port=port)
+        except (MeshcatPortInUse, ValueError) as err:
+            print(f"error: {err}", file=sys.stderr)
+            return 2
+        if args.meshcat:
+            print(f"Meshcat: open {view.url} in a browser")
+    realtime = args.realtime_rate
+    if realtime is None and args.meshcat:
+        realtime = 1.0
     print(f"running scenario '{scenario.name}' ({scenario.duration:g} s) -> {out}")
     try:
-        result = run_scenario(scenario, out_dir=out, progress=not args.quiet)
+        result = run_scenario(scenario, out_dir=out, progress=not args.quiet,
+                              configure=view.configure if view else None,
+                              realtime_rate=realtime)
     except SimulationFailed as err:
         print(f"error: {err}", file=sys.stderr)
         print(f"logs up to the failure are in {out}", file=sys.stderr)
-        return 1
+        return 130 if isinstance(err, SimulationInterrupted) else 1
+    finally:
+        if view is not None:
+            print(f"wrote {view.finish(out)}", file=sys.stderr)
     _print_summary(result)
     if args.json:
         print(json.dumps(result.metrics, indent=2))
     return 0
+
+
+def _cmd_analyze(args: argparse.Namespace) -> int:
+    from aerial_drake.analysis import cli_analyze
+    return cli_analyze(args)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -92,14 +124,41 @@ def build_parser() -> argparse.ArgumentParser:
         description="Task-space tracking control for underactuated aerial manipulators, on Drake.")
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="simulate a scenario and write log.npz and metrics.json")
-    run.add_argument("scenario", help="shipped scenario name (e.g. nominal) or a YAML file")
+    run.add_argument("scenario", help="shipped scenario name (e.g. nominal), a YAML file, or "
+                     "'paper' (nominal and disturbed, and the paper's figures, in OUT/paper)")
     run.add_argument("--duration", type=float, default=None, help="override the duration (s)")
     run.add_argument("--out", default="out", help="output folder (default: ./out)")
     run.add_argument("--quiet", action="store_true", help="no progress line")
     run.add_argument("--json", action="store_true", help="also print metrics.json")
+    run.add_argument("--meshcat", action="store_true",
+                     help="watch it live in a browser (prints the URL) and write replay.html")
+    run.add_argument("--record", action="store_true",
+                     help="write replay.html (a self-contained 3D replay) without watching")
+    run.add_argument("--realtime-rate", type=float, default=None,
+                     help="pace the simulation (1.0 = real time; default 1.0 with --meshcat, "
+                          "else as fast as possible)")
+    run.add_argument("--meshcat-host", default="localhost",
+                     help="interface Meshcat listens on (default: localhost only; '*' = all)")
+    run.add_argument("--meshcat-port", type=int, default=None,
+                     help="Meshcat's port (default: the first free of 7000-7099; 0 = any "
+                          "free port; a busy port is an error)")
+    run.add_argument("--seed", type=int, default=None,
+                     help="perturb the initial offsets by a reproducible uniform draw from "
+                          "numpy.random.default_rng(SEED) (bounds: aerial_drake.paper."
+                          "SEED_BOUNDS); without it runs are deterministic")
     run.set_defaults(func=_cmd_run)
     info = sub.add_parser("info", help="print a summary of the models and scenarios")
     info.set_defaults(func=_cmd_info)
+    analyze = sub.add_parser(
+        "analyze", help="equilibria, linearisation, eigenvalues, controllability, Lyapunov "
+        "function and region of attraction; writes analysis.json and plots (docs/analysis.md)")
+    analyze.add_argument("--out", default="out/analysis", help="output folder")
+    analyze.add_argument("--scenario", default="nominal", help="scenario whose gains and "
+                         "trajectory are analysed (default: nominal)")
+    analyze.add_argument("--fast", action="store_true", help="short runs (a smoke test)")
+    analyze.add_argument("--seed", type=int, default=0, help="region-of-attraction draws")
+    analyze.add_argument("--quiet", action="store_true", help="no progress lines")
+    analyze.set_defaults(func=_cmd_analyze)
     return parser
 
 

@@ -20,7 +20,7 @@ from aerial_drake.diagram import ClosedLoop, build_simulation
 from aerial_drake.equilibrium import solve_configuration
 from aerial_drake.metrics import (
     compute_metrics, disturbance_response, limits_by_input, phase_edges, rotor_metrics)
-from aerial_drake.models import AerialManipulator
+from aerial_drake.models import ROTOR_DIRECTIONS, AerialManipulator
 from aerial_drake.reference import evaluate_reference
 from aerial_drake.scenarios import Scenario
 
@@ -111,7 +111,7 @@ def set_initial_state(scenario: Scenario, loop: ClosedLoop, plant_context: Conte
     sim.plant.SetFreeBodyPose(plant_context, sim.base_body, RigidTransform(R0, p0))
     for joint, mj, offset in zip(sim.arm_joints, model.arm_joints, init.arm_offset):
         joint.set_angle(plant_context, q_model[mj.position_start()] + offset)
-    for joint, sign in zip(sim.rotor_joints, (1.0, -1.0)):
+    for joint, sign in zip(sim.rotor_joints, ROTOR_DIRECTIONS):
         joint.set_angular_rate(plant_context, sign * scenario.rotors.speed)
 
 
@@ -157,7 +157,8 @@ class _Progress:
 def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
                  progress: bool = True, stream=None,
                  configure: Callable | None = None,
-                 realtime_rate: float | None = None) -> RunResult:
+                 realtime_rate: float | None = None,
+                 zero_controller: bool = False) -> RunResult:
     """Simulate ``scenario``; write ``log.npz`` and ``metrics.json`` to ``out_dir`` if given.
 
     A failure (an assumption of the paper violated, a diverging state) stops the run with
@@ -169,7 +170,7 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     """
     scenario.validate()
     stream = stream if stream is not None else sys.stderr
-    builder, loop, loggers = build_simulation(scenario)
+    builder, loop, loggers = build_simulation(scenario, zero_controller=zero_controller)
     check_workspace(scenario, loop.controller_model)
     if configure is not None:
         configure(builder, loop)
@@ -256,7 +257,7 @@ def _metrics(scenario: Scenario, loop: ClosedLoop, log: dict, wall: float,
         nq = sim.plant.num_positions()
         metrics["rotors"] = rotor_metrics(
             log["plant_state"][:, nq + sim.rotor_velocity_indices], log["rotor_drive_torque"],
-            scenario.rotors.speed * np.array([1.0, -1.0]))
+            scenario.rotors.speed * np.array(ROTOR_DIRECTIONS))
     return metrics
 
 
