@@ -659,6 +659,19 @@ def region_of_attraction(base: Scenario | str = "nominal", *,
 
 
 # --- Everything, to a folder ----------------------------------------------------------------
+def _nan_to_none(x):
+    """``x`` with every float NaN (also inside numpy arrays) replaced by None."""
+    if isinstance(x, dict):
+        return {k: _nan_to_none(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_nan_to_none(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return _nan_to_none(x.tolist())
+    if isinstance(x, (float, np.floating)) and math.isnan(x):
+        return None
+    return x
+
+
 def _json_default(x):
     if isinstance(x, np.ndarray):
         return x.tolist()
@@ -717,7 +730,9 @@ def analyze(out_dir: str | Path = "out/analysis", *, scenario: str = "nominal",
     for name, fig in figures.items():
         fig.savefig(out / name, dpi=120)
         report["figures"].append(name)
-    (out / "analysis.json").write_text(json.dumps(report, indent=2, default=_json_default))
+    # JSON has no NaN: undefined numbers are written as null.
+    (out / "analysis.json").write_text(
+        json.dumps(_nan_to_none(report), indent=2, default=_json_default, allow_nan=False))
     say(f"wrote {out / 'analysis.json'} and {', '.join(figures)}")
     return report
 

@@ -61,10 +61,16 @@ def _print_summary(result) -> None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from aerial_drake.equilibrium import UnreachablePose
     from aerial_drake.runner import SimulationFailed, SimulationInterrupted, run_scenario
     from aerial_drake.scenarios import ScenarioError, load_scenario
 
     if args.scenario == "paper":  # both of Section IV's runs and Figs. 3-6 (aerial_drake.paper)
+        if args.meshcat or args.record or args.realtime_rate is not None:
+            print("error: --meshcat, --record and --realtime-rate watch one scenario; use "
+                  "'aerial-drake run nominal --meshcat' or 'run disturbed --meshcat'",
+                  file=sys.stderr)
+            return 2
         from aerial_drake.paper import cli_run
         return cli_run(args)
     overrides = {}
@@ -100,6 +106,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
         result = run_scenario(scenario, out_dir=out, progress=not args.quiet,
                               configure=view.configure if view else None,
                               realtime_rate=realtime)
+    except (ScenarioError, UnreachablePose) as err:  # found before the simulation starts
+        print(f"error: {err}", file=sys.stderr)
+        return 2
     except SimulationFailed as err:
         print(f"error: {err}", file=sys.stderr)
         print(f"logs up to the failure are in {out}", file=sys.stderr)

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from aerial_drake.decoupling import Decomposition, _cross_rows, cross, inv, value_of, vee
+from aerial_drake.decoupling import Decomposition, cross_rows, cross, inv, value_of, vee
 
 _E3 = np.eye(3)
 _e3 = np.array([0.0, 0.0, 1.0])
@@ -77,6 +77,12 @@ class Gains:
                 raise ValueError(f"{prefix}.{name} = {value} must be finite and > 0 "
                                  "(Proposition 1). Set it in the scenario YAML.")
         return self
+
+
+#: Default thresholds of the checks of Assumption 1 (sigma_min(J_3)) and 2 (|f_d|, N); a
+#: scenario may set its own (``sigma_min_J3_limit``, ``f_d_limit``).
+SIGMA_MIN_J3_LIMIT = 1e-3
+F_D_LIMIT = 1.0
 
 
 class AssumptionViolation(RuntimeError):
@@ -165,17 +171,25 @@ def desired_attitude(f_d, f_d_dot, f_d_ddot, b1d):
     b3, b3_dot, b3_ddot = unit_vector_derivatives(f_d, f_d_dot, f_d_ddot)  # (12)
     b1, b1_dot, b1_ddot = b1d
     # c = b3 x b1 and its derivatives (Leibniz), six cross products in one call.
-    x = _cross_rows(np.column_stack([b3, b3_dot, b3, b3_ddot, b3_dot, b3]),
+    x = cross_rows(np.column_stack([b3, b3_dot, b3, b3_ddot, b3_dot, b3]),
                     np.column_stack([b1, b1, b1_dot, b1, b1_dot, b1_ddot]))
     c, c_dot, c_ddot = x[:, 0], x[:, 1] + x[:, 2], x[:, 3] + 2.0 * x[:, 4] + x[:, 5]
     b2, b2_dot, b2_ddot = unit_vector_derivatives(c, c_dot, c_ddot)
     # (13): R_d = [b2 x b3, b2, b3], and its derivatives.
-    y = _cross_rows(np.column_stack([b2, b2_dot, b2, b2_ddot, b2_dot, b2]),
+    y = cross_rows(np.column_stack([b2, b2_dot, b2, b2_ddot, b2_dot, b2]),
                     np.column_stack([b3, b3, b3_dot, b3, b3_dot, b3_ddot]))
     R_d = np.column_stack([y[:, 0], b2, b3])
     R_d_dot = np.column_stack([y[:, 1] + y[:, 2], b2_dot, b3_dot])
     R_d_ddot = np.column_stack([y[:, 3] + 2.0 * y[:, 4] + y[:, 5], b2_ddot, b3_ddot])
     return R_d, R_d_dot, R_d_ddot, _norm(c)
+
+
+def desired_force(m, gravity: float, com_reference: np.ndarray, x_t: np.ndarray,
+                  x_t_dot: np.ndarray, K_x: np.ndarray, D_x: np.ndarray) -> np.ndarray:
+    """(10): f_d = m x_d'' + m g e3 - K_x x~ - D_x x~_dot (K_x, D_x diagonals).
+
+    ``com_reference`` holds x_d and its derivatives as rows (5, 3)."""
+    return m * (com_reference[2] + gravity * _e3) - K_x * x_t - D_x * x_t_dot
 
 
 def rotation_angle(R: np.ndarray) -> float:
@@ -186,7 +200,8 @@ def rotation_angle(R: np.ndarray) -> float:
 
 def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "GainMatrices",
                     gravity: float, *,
-                    sigma_min_J3_limit: float = 1e-4, f_d_limit: float = 1e-6,
+                    sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT,
+                    f_d_limit: float = F_D_LIMIT,
                     ) -> ControlOutput:
     """The whole law (10)-(22) at one state.
 
@@ -204,7 +219,7 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
     # CoM control (10)-(11).
     x_t = d.p_WG - x_d
     x_t_dot = xg_dot - xd1
-    f_d = m * xd2 + m * ge3 - K.K_x * x_t - K.D_x * x_t_dot  # (10)
+    f_d = desired_force(m, gravity, ref.com, x_t, x_t_dot, K.K_x, K.D_x)  # (10)
     f_d_norm = float(np.linalg.norm(value_of(f_d)))
     if not f_d_norm > f_d_limit:
         raise AssumptionViolation(

@@ -18,8 +18,8 @@ from pydrake.systems.framework import (
 from pydrake.systems.scalar_conversion import TemplateSystem
 
 from aerial_drake.control import (
-    DIAGNOSTICS_SIZE, AssumptionViolation, ControlOutput, GainMatrices, Gains, Reference,
-    TaskKinematics, compute_control)
+    DIAGNOSTICS_SIZE, F_D_LIMIT, SIGMA_MIN_J3_LIMIT, AssumptionViolation, ControlOutput,
+    GainMatrices, Gains, Reference, TaskKinematics, compute_control)
 from aerial_drake.decoupling import DecoupledDynamics, value_of
 from aerial_drake.reference import (
     COM_REFERENCE_SIZE, HEADING_REFERENCE_SIZE, TASK_REFERENCE_SIZE, unpack_com_reference,
@@ -75,7 +75,7 @@ class _DecoupledControllerBase(_ControllerPorts):
 
     def _setup(self, plant: MultibodyPlant, end_effector_frame: Frame,
                q3_joint_velocity_index: int, q3_joint_position_index: int, gains: Gains, *,
-               sigma_min_J3_limit: float = 1e-3, f_d_limit: float = 1.0):
+               sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT, f_d_limit: float = F_D_LIMIT):
         self._plant = plant
         self._gains = gains
         self._dynamics = DecoupledDynamics(plant)
@@ -188,8 +188,9 @@ def DecoupledController_(T):
         __doc__ = _DecoupledControllerBase.__doc__
 
         def _construct(self, plant, end_effector_frame, q3_joint_velocity_index,
-                       q3_joint_position_index, gains, *, sigma_min_J3_limit=1e-3,
-                       f_d_limit=1.0, converter=None):
+                       q3_joint_position_index, gains, *,
+                       sigma_min_J3_limit=SIGMA_MIN_J3_LIMIT, f_d_limit=F_D_LIMIT,
+                       converter=None):
             LeafSystem_[T].__init__(self, converter)
             self._setup(plant, end_effector_frame, q3_joint_velocity_index,
                         q3_joint_position_index, gains, sigma_min_J3_limit=sigma_min_J3_limit,
@@ -213,8 +214,8 @@ class ZeroController(_ControllerPorts, LeafSystem):
     (the plant falls; only the cost of everything but the control law is measured)."""
 
     def __init__(self, plant: MultibodyPlant, end_effector_frame: Frame,
-                 q3_joint_velocity_index: int, q3_joint_position_index: int, gains: Gains,
-                 **unused):
+                 q3_joint_velocity_index: int, q3_joint_position_index: int, gains: Gains, *,
+                 sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT, f_d_limit: float = F_D_LIMIT):
         super().__init__()
         nv = plant.num_velocities()
         self.evaluations = 0

@@ -71,7 +71,7 @@ def value_of(a) -> np.ndarray:
     return ExtractValue(a).reshape(a.shape) if a.dtype == object else a
 
 
-def _cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def cross_rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Cross products of 3-vectors stacked along axis -2: a, b of shape (..., 3, k)."""
     a0, a1, a2 = a[..., 0, :], a[..., 1, :], a[..., 2, :]
     b0, b1, b2 = b[..., 0, :], b[..., 1, :], b[..., 2, :]
@@ -101,8 +101,8 @@ def _crm_times(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """crm(a) b for stacks of spatial vectors along axis -2: a, b of shape (..., 6, k)."""
     aw, av = a[..., :3, :], a[..., 3:, :]
     bw, bv = b[..., :3, :], b[..., 3:, :]
-    top = _cross_rows(aw, bw)
-    bottom = _cross_rows(av, bw) + _cross_rows(aw, bv)
+    top = cross_rows(aw, bw)
+    bottom = cross_rows(av, bw) + cross_rows(aw, bv)
     return np.concatenate([top, bottom], axis=-2)
 
 

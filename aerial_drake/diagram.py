@@ -49,33 +49,20 @@ class ClosedLoop:
     n_arm: int
 
 
-def state_projection(source: AerialManipulator, target: AerialManipulator) -> np.ndarray:
-    """Selection matrix mapping ``source``'s plant state to ``target``'s (joints matched by
-    name; the floating base by body). Used to feed the rigid model's controller from the
-    rotors plant."""
-    sp, tp = source.plant, target.plant
-    nq_s, nv_s = sp.num_positions(), sp.num_velocities()
-    nq_t, nv_t = tp.num_positions(), tp.num_velocities()
-    P = np.zeros((nq_t + nv_t, nq_s + nv_s))
-    for j in range(tp.num_joints()):
-        tj = tp.get_joint(_joint_index(j))
-        if tj.num_positions() == 0:
-            continue
-        sj = sp.GetJointByName(tj.name()) if sp.HasJointNamed(tj.name()) else None
-        if sj is None:
-            raise ValueError(f"joint '{tj.name()}' of the controller model is not in the plant")
-        for k in range(tj.num_positions()):
-            P[tj.position_start() + k, sj.position_start() + k] = 1.0
-        for k in range(tj.num_velocities()):
-            P[nq_t + tj.velocity_start() + k, nq_s + sj.velocity_start() + k] = 1.0
-    if not np.all(P.sum(axis=1) == 1.0):
-        raise ValueError("controller model state not covered by the plant's state")
-    return P
-
-
-def _joint_index(j: int):
-    from pydrake.multibody.tree import JointIndex
-    return JointIndex(j)
+def input_limits(scenario: Scenario, model: AerialManipulator,
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper limits of the applied ``[f, mu, tau]``: Table I's thrust and body torque
+    (scenario ``actuation``) and the arm's effort limits (model file); infinite where the
+    scenario does not saturate."""
+    a = scenario.actuation
+    effort = model.arm_effort_limits()
+    if not a.saturate:
+        inf = np.full(4 + effort.size, np.inf)
+        return -inf, inf
+    tm = a.body_torque_max
+    lower = np.concatenate([[a.thrust_min, -tm, -tm, -tm], -effort])
+    upper = np.concatenate([[a.thrust_max, tm, tm, tm], effort])
+    return lower, upper
 
 
 def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
@@ -116,7 +103,9 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
     if scenario.plant_variant == "rigid":
         builder.Connect(state_out, controller.get_state_input_port())
     else:
-        selector = builder.AddSystem(MatrixGain(state_projection(sim, model)))
+        # The rotors plant's state without the rotors' coordinates is the rigid model's.
+        nx = sim.plant.num_multibody_states()
+        selector = builder.AddSystem(MatrixGain(np.eye(nx)[sim.rigid_state_indices]))
         selector.set_name("model_state")
         builder.Connect(state_out, selector.get_input_port())
         builder.Connect(selector.get_output_port(), controller.get_state_input_port())
@@ -147,14 +136,11 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
         builder.Connect(base_cmd, lag.get_input_port())
         base_cmd = lag.get_output_port()
 
-    a = scenario.actuation
-    if a.saturate:
-        tmax = a.body_torque_max
-        base_sat = builder.AddSystem(Saturation([a.thrust_min, -tmax, -tmax, -tmax],
-                                                [a.thrust_max, tmax, tmax, tmax]))
+    if scenario.actuation.saturate:
+        lower, upper = input_limits(scenario, model)
+        base_sat = builder.AddSystem(Saturation(lower[:4], upper[:4]))
         base_sat.set_name("base_saturation")
-        effort = model.arm_effort_limits()
-        joint_sat = builder.AddSystem(Saturation(-effort, effort))
+        joint_sat = builder.AddSystem(Saturation(lower[4:], upper[4:]))
         joint_sat.set_name("joint_saturation")
         builder.Connect(base_cmd, base_sat.get_input_port())
         builder.Connect(joint_cmd, joint_sat.get_input_port())

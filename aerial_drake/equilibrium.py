@@ -10,6 +10,7 @@ from pydrake.math import RotationMatrix
 from pydrake.multibody.inverse_kinematics import ComPositionConstraint, InverseKinematics
 from pydrake.solvers import Solve
 
+from aerial_drake.decoupling import vee
 from aerial_drake.models import AerialManipulator
 
 
@@ -24,14 +25,18 @@ class ConfigurationResidual:
     ee_orientation: float  # rad
     base_orientation: float  # rad
     q3: float  # rad
+    joint_limits: float  # rad beyond the arm's position limits (0 inside)
 
-    def worst(self, tol_m: float, tol_rad: float) -> list[str]:
-        """Names of the constraints violated beyond the tolerances."""
+    def violations(self, tol_m: float, tol_rad: float, joint_limits: bool = True) -> list[str]:
+        """Names of the constraints violated beyond the tolerances, with by how much."""
         failed = []
-        for name, value, tol in (
-                ("CoM position", self.com, tol_m), ("end-effector position", self.ee_position, tol_m),
-                ("end-effector orientation", self.ee_orientation, tol_rad),
-                ("base orientation", self.base_orientation, tol_rad), ("q3", self.q3, tol_rad)):
+        checks = [("CoM position", self.com, tol_m),
+                  ("end-effector position", self.ee_position, tol_m),
+                  ("end-effector orientation", self.ee_orientation, tol_rad),
+                  ("base orientation", self.base_orientation, tol_rad), ("q3", self.q3, tol_rad)]
+        if joint_limits:
+            checks.append(("arm joint limits", self.joint_limits, tol_rad))
+        for name, value, tol in checks:
             if not value <= tol:
                 failed.append(f"{name} (off by {value:.3g})")
         return failed
@@ -39,17 +44,19 @@ class ConfigurationResidual:
 
 def solve_configuration(manip: AerialManipulator, *, p_WG: np.ndarray, R_WB: np.ndarray,
                         p_WE: np.ndarray, R_WE: np.ndarray, q3: float,
-                        q_guess: np.ndarray | None = None, tolerance: float = 1e-8,
-                        ) -> np.ndarray:
+                        q_guess: np.ndarray | None = None, tolerance: float = 1e-6,
+                        respect_joint_limits: bool = True) -> np.ndarray:
     """Generalized positions with the system CoM at ``p_WG``, the base at orientation ``R_WB``,
     the end-effector frame at ``(p_WE, R_WE)`` and joint 3 at ``q3``.
 
     Ten equations in ten unknowns (base position, seven joints): the solution is locally
-    unique. Joint limits are respected. Raises :class:`UnreachablePose` naming the constraints
-    that could not be met.
+    unique. Raises :class:`UnreachablePose` naming the constraints that the solution misses by
+    more than ``tolerance`` (m or rad): the arm's joint limits among them unless
+    ``respect_joint_limits`` is False (the continuous simulation does not enforce them, and
+    the paper's task leaves them; docs/models.md).
     """
     plant = manip.plant
-    ik = InverseKinematics(plant, with_joint_limits=True)
+    ik = InverseKinematics(plant, with_joint_limits=respect_joint_limits)
     q = ik.q()
     prog = ik.get_mutable_prog()
     world = plant.world_frame()
@@ -65,8 +72,13 @@ def solve_configuration(manip: AerialManipulator, *, p_WG: np.ndarray, R_WB: np.
     i3 = manip.arm_joints[2].position_start()
     prog.AddBoundingBoxConstraint(q3, q3, q[i3])
     if q_guess is None:
-        q_guess = nominal_positions(manip, p_WB=np.asarray(p_WE) + [-0.3, 0.0, 0.6],
-                                    R_WB=R_WB)
+        # The nominal posture, with the base placed so that its CoM lands on p_WG.
+        q_guess = nominal_positions(manip, p_WB=np.zeros(3), R_WB=R_WB)
+        guess_ctx = plant.CreateDefaultContext()
+        plant.SetPositions(guess_ctx, q_guess)
+        q_guess = nominal_positions(
+            manip, p_WB=np.asarray(p_WG) - plant.CalcCenterOfMassPositionInWorld(guess_ctx),
+            R_WB=R_WB)
     prog.SetInitialGuess(q, q_guess)
     prog.SetInitialGuess(r, p_WG)
     result = Solve(prog)
@@ -74,7 +86,8 @@ def solve_configuration(manip: AerialManipulator, *, p_WG: np.ndarray, R_WB: np.
                            R_WE=R_WE, q3=q3)
     residual = configuration_residual(manip, q_sol, p_WG=p_WG, R_WB=R_WB, p_WE=p_WE,
                                       R_WE=R_WE, q3=q3)
-    failed = residual.worst(tol_m=max(tolerance, 1e-6), tol_rad=max(tolerance, 1e-6))
+    failed = residual.violations(tol_m=tolerance, tol_rad=tolerance,
+                                 joint_limits=respect_joint_limits)
     if failed:
         raise UnreachablePose(
             "no configuration meets the requested pose; failing constraints: "
@@ -112,7 +125,7 @@ def _newton_polish(manip: AerialManipulator, q: np.ndarray, *, p_WG, R_WB, p_WE,
         r = np.concatenate([
             plant.CalcCenterOfMassPositionInWorld(ctx) - p_WG,
             X_WE.translation() - p_WE,
-            _vee_skew(X_WE.rotation().matrix() @ np.asarray(R_WE).T),
+            vee(X_WE.rotation().matrix() @ np.asarray(R_WE).T),
             [q[i3.position_start()] - q3]])
         if np.abs(r).max() < 1e-13:
             break
@@ -124,10 +137,6 @@ def _newton_polish(manip: AerialManipulator, q: np.ndarray, *, p_WG, R_WB, p_WE,
         step = np.linalg.lstsq(J[:, cols], r, rcond=None)[0]
         q[unknowns] -= step
     return q
-
-
-def _vee_skew(S: np.ndarray) -> np.ndarray:
-    return 0.5 * np.array([S[2, 1] - S[1, 2], S[0, 2] - S[2, 0], S[1, 0] - S[0, 1]])
 
 
 def _rpy(R: np.ndarray) -> np.ndarray:
@@ -142,6 +151,8 @@ def configuration_residual(manip: AerialManipulator, q: np.ndarray, *, p_WG, R_W
     plant.SetPositions(ctx, q)
     X_WE = manip.end_effector_frame.CalcPoseInWorld(ctx)
     R_actual = plant.EvalBodyPoseInWorld(ctx, manip.base_body).rotation()
+    lower, upper = manip.arm_position_limits()
+    q_arm = q[manip.arm_position_indices]
 
     def angle(Ra: RotationMatrix, Rb: np.ndarray) -> float:
         return float(Ra.InvertAndCompose(RotationMatrix(Rb)).ToAngleAxis().angle())
@@ -151,7 +162,8 @@ def configuration_residual(manip: AerialManipulator, q: np.ndarray, *, p_WG, R_W
         ee_position=float(np.linalg.norm(X_WE.translation() - p_WE)),
         ee_orientation=angle(X_WE.rotation(), R_WE),
         base_orientation=angle(R_actual, R_WB),
-        q3=abs(float(q[manip.arm_joints[2].position_start()]) - q3))
+        q3=abs(float(q[manip.arm_joints[2].position_start()]) - q3),
+        joint_limits=float(np.max(np.maximum(lower - q_arm, q_arm - upper), initial=0.0)))
 
 
 def nominal_positions(manip: AerialManipulator, p_WB: np.ndarray, R_WB: np.ndarray,

@@ -29,6 +29,7 @@ import numpy as np
 from aerial_drake.plots import Run, load_run, write_figures
 from aerial_drake.runner import SimulationFailed, run_scenario
 from aerial_drake.scenarios import Scenario, ScenarioError, load_scenario
+from aerial_drake.equilibrium import UnreachablePose
 
 PAPER_SCENARIOS = ("nominal", "disturbed")
 
@@ -193,7 +194,7 @@ def cli_run(args) -> int:
     try:
         result = run_paper(out, args.duration, seed=getattr(args, "seed", None),
                            progress=not args.quiet, stream=sys.stderr)
-    except ScenarioError as err:
+    except (ScenarioError, UnreachablePose) as err:  # found before a simulation starts
         print(f"error: {err}", file=sys.stderr)
         return 2
     print(result.table)

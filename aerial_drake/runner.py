@@ -11,12 +11,13 @@ from typing import Callable
 
 import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
-from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
+from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import Context, Diagram, EventStatus
 
-from aerial_drake.control import DIAGNOSTICS_LAYOUT, AssumptionViolation, desired_attitude
-from aerial_drake.diagram import ClosedLoop, build_simulation
+from aerial_drake.control import (
+    DIAGNOSTICS_LAYOUT, AssumptionViolation, desired_attitude, desired_force)
+from aerial_drake.diagram import ClosedLoop, build_simulation, input_limits
 from aerial_drake.equilibrium import solve_configuration
 from aerial_drake.metrics import (
     compute_metrics, disturbance_response, limits_by_input, phase_edges, rotor_metrics)
@@ -51,11 +52,16 @@ def reference_configuration(scenario: Scenario, model: AerialManipulator,
     base attitude R_d of (13) for zero CoM error, end effector on (p_ed, R_ed), q3 = q3d."""
     ref = evaluate_reference(scenario.trajectory, t)
     m = model.plant.CalcTotalMass(model.plant.CreateDefaultContext())
-    g = -model.plant.gravity_field().gravity_vector()
+    g = -model.plant.gravity_field().gravity_vector()[2]
     x = ref.com
-    R_d = desired_attitude(m * (x[2] + g), m * x[3], m * x[4], ref.b1d)[0]
+    zero = np.zeros(3)
+    # (10) with zero CoM error; its derivatives are then m times x_d's 3rd and 4th.
+    f_d = desired_force(m, g, x, zero, zero, zero, zero)
+    R_d = desired_attitude(f_d, m * x[3], m * x[4], ref.b1d)[0]
+    # Joint limits are not imposed: the simulated plant does not enforce them, and at t = 0 the
+    # paper's reference needs joint 6 about 0.19 rad past its 120 deg (docs/control.md).
     return solve_configuration(model, p_WG=x[0], R_WB=R_d, p_WE=ref.p_ed, R_WE=ref.R_ed,
-                               q3=ref.q3d)
+                               q3=ref.q3d, respect_joint_limits=False)
 
 
 #: How far (m) the desired end effector may stray from its nominal offset to the desired CoM,
@@ -221,22 +227,9 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     return result
 
 
-def input_limits(scenario: Scenario, loop: ClosedLoop) -> tuple[np.ndarray, np.ndarray]:
-    """Lower and upper limits of [f, mu, tau] (inf where the scenario does not saturate)."""
-    a = scenario.actuation
-    effort = loop.controller_model.arm_effort_limits()
-    if not a.saturate:
-        inf = np.full(4 + loop.n_arm, np.inf)
-        return -inf, inf
-    tm = a.body_torque_max
-    lower = np.concatenate([[a.thrust_min, -tm, -tm, -tm], -effort])
-    upper = np.concatenate([[a.thrust_max, tm, tm, tm], effort])
-    return lower, upper
-
-
 def _metrics(scenario: Scenario, loop: ClosedLoop, log: dict, wall: float,
              sim_time: float) -> dict:
-    lower, upper = input_limits(scenario, loop)
+    lower, upper = input_limits(scenario, loop.controller_model)
     windows = [(d.start, d.stop) for d in scenario.disturbances]
     edges = phase_edges(windows, scenario.duration)
     metrics = compute_metrics(log["t"], log["diagnostics"], log["applied_command"], lower,
@@ -245,7 +238,7 @@ def _metrics(scenario: Scenario, loop: ClosedLoop, log: dict, wall: float,
         "scenario": scenario.name,
         "simulated_time_s": sim_time,
         "wall_time_s": wall,
-        "real_time_factor": sim_time / wall if wall > 0 else float("nan"),
+        "real_time_factor": sim_time / wall if wall > 0 else None,
         "controller_evaluations": loop.controller.evaluations,
         "input_limits": limits_by_input(lower, upper),
         "disturbance_response": disturbance_response(

@@ -54,7 +54,7 @@ from pydrake.geometry import (
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import Context, DiagramBuilder, EventStatus, LeafSystem
 
-from aerial_drake.control import desired_attitude
+from aerial_drake.control import desired_attitude, desired_force
 from aerial_drake.diagram import ClosedLoop
 from aerial_drake.models import AerialManipulator, make_plant
 from aerial_drake.reference import (
@@ -229,7 +229,7 @@ class TrackingOverlay(LeafSystem):
         self._context = plant.CreateDefaultContext()
         self._state_indices = plant_model.rigid_state_indices
         self._mass = plant.CalcTotalMass(self._context)
-        self._gravity = -plant.gravity_field().gravity_vector()
+        self._gravity = -plant.gravity_field().gravity_vector()[2]
         self._K_x = np.asarray(scenario.gains.K_x, dtype=float)
         self._D_x = np.asarray(scenario.gains.D_x, dtype=float)
         times = np.linspace(0.0, scenario.duration,
@@ -301,9 +301,8 @@ class TrackingOverlay(LeafSystem):
 
     def _desired_base_attitude(self, p_WG, v_WG, com, b1d) -> np.ndarray | None:
         """R_d of (12)-(13) for the CoM at p_WG moving at v_WG (None if f_d vanishes)."""
-        # (10) f_d = m (x_d'' + g e3) - K_x x~ - D_x x~'
-        f_d = (self._mass * (com[2] + self._gravity) - self._K_x * (p_WG - com[0])
-               - self._D_x * (v_WG - com[1]))
+        f_d = desired_force(self._mass, self._gravity, com, p_WG - com[0], v_WG - com[1],
+                            self._K_x, self._D_x)  # (10)
         if not np.linalg.norm(f_d) > 1e-9:
             return None
         zero = np.zeros(3)  # R_d itself needs neither f_d' nor f_d''

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from aerial_drake.control import Gains, GainMatrices, desired_attitude, unit_vector_derivatives
-from aerial_drake.decoupling import vee
+from aerial_drake.decoupling import hat, vee
 
 
 def poly(t, coeffs):
@@ -83,3 +83,7 @@ def test_vee_takes_skew_part():
     R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # 90 deg about z
     # (14): e_R = 1/2 (R_d^T R - R^T R_d)^vee = sin(angle) axis.
     np.testing.assert_allclose(vee(R), [0, 0, 1.0])
+    # A symmetric part, with off-diagonal entries, must not leak into vee.
+    a = np.array([0.3, -1.2, 2.0])
+    S = np.array([[1.0, 0.4, -0.7], [0.4, 2.0, 0.9], [-0.7, 0.9, 3.0]])
+    np.testing.assert_allclose(vee(hat(a) + S), a, atol=1e-15)

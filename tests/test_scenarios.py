@@ -56,6 +56,8 @@ def test_missing_gains_are_named(tmp_path):
 
 @pytest.mark.parametrize("override,match", [
     ({"plant_variant": "quad"}, "plant_variant: 'quad' is not one of"),
+    ({"sigma_min_J3_limit": -1.0}, "sigma_min_J3_limit must be > 0"),
+    ({"f_d_limit": 0.0}, "f_d_limit must be > 0"),
     ({"duration": -1.0}, "duration must be > 0"),
     ({"controller_period": -1e-3}, "controller_period must be >= 0"),
 ])
@@ -93,3 +95,15 @@ def test_assumption_2_vanishing_thrust():
     com[8] = -9.81  # x_d'' = -g e3
     with pytest.raises(AssumptionViolation, match=r"Assumption 2 violated: the desired thrust vanishes, \|f_d\| = [-+.e0-9]+ N"):
         ctrl.solve(np.concatenate([q, np.zeros(13)]), com, task, heading)
+
+
+def test_actuation_limits_have_no_silent_default(tmp_path):
+    text = shipped_scenarios()["nominal"].read_text().replace("  thrust_max: 980.6\n", "")
+    with pytest.raises(ScenarioError, match=r"actuation\.thrust_max must be set"):
+        load_scenario(write(tmp_path, text))
+
+
+def test_rotor_speed_on_the_rigid_plant_is_an_error(tmp_path):
+    text = shipped_scenarios()["nominal"].read_text() + "rotors:\n  speed: 81.0\n"
+    with pytest.raises(ScenarioError, match="rotors.speed is set but plant_variant is 'rigid'"):
+        load_scenario(write(tmp_path, text))

@@ -11,7 +11,6 @@ Writes ``<out>/meshcat_<scenario>_<t>s.png``. Needs Chromium (Debian: apt-get in
 from __future__ import annotations
 
 import argparse
-import math
 import sys
 import tempfile
 from pathlib import Path
@@ -19,7 +18,7 @@ from pathlib import Path
 from pydrake.systems.framework import EventStatus, LeafSystem
 
 from aerial_drake.runner import run_scenario
-from aerial_drake.scenarios import Rotors, load_scenario, shipped_scenarios
+from aerial_drake.scenarios import load_scenario
 from aerial_drake.screenshot import colourful_fraction, screenshot
 from aerial_drake.visualization import MeshcatView
 
@@ -54,19 +53,13 @@ class Snapshots(LeafSystem):
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("scenario", nargs="?", default=None,
-                        help="scenario name or YAML (default: disturbed, else nominal with "
-                             "the rotors plant)")
+                        help="scenario name or YAML (default: disturbed)")
     parser.add_argument("--times", type=float, nargs="+", default=[0.0, 4.5, 9.5])
     parser.add_argument("--out", default="docs/img")
     parser.add_argument("--size", type=int, nargs=2, default=[960, 640])
     args = parser.parse_args(argv)
 
-    name, overrides = args.scenario, {}
-    if name is None:
-        name = "disturbed" if "disturbed" in shipped_scenarios() else "nominal"
-        if name == "nominal":
-            print("no disturbed scenario yet: nominal with the rotors plant at 26 pi rad/s")
-            overrides = {"plant_variant": "rotors", "rotors": Rotors(speed=26.0 * math.pi)}
+    name, overrides = args.scenario or "disturbed", {}
     scenario = load_scenario(name, overrides=overrides)
     overrides["duration"] = min(scenario.duration, max(args.times) + 0.5)
     # The paths and the camera cover the whole scenario, the run stops after the last shot.

@@ -18,7 +18,7 @@ import numpy as np
 from pydrake.common.yaml import yaml_load_data, yaml_load_typed
 from pydrake.systems.analysis import SimulatorConfig
 
-from aerial_drake.control import Gains
+from aerial_drake.control import F_D_LIMIT, SIGMA_MIN_J3_LIMIT, Gains
 from aerial_drake.models import PLANT_VARIANTS
 from aerial_drake.reference import TrajectoryParams
 from aerial_drake.resources import scenario_directory  # the YAML files beside this module
@@ -66,11 +66,11 @@ class Actuation:
     lag_rise_time: float = 0.0
     # Saturate the applied inputs at the limits below and the arm's effort limits (model file).
     saturate: bool = True
-    # Thrust range (N), Table I.
+    # Thrust range (N), Table I: [0, 980.6]. No default: the scenario must say.
     thrust_min: float = 0.0
-    thrust_max: float = math.inf
-    # Body torque bound, each axis (N m), Table I.
-    body_torque_max: float = math.inf
+    thrust_max: float = math.nan
+    # Body torque bound, each axis (N m), Table I: 200.
+    body_torque_max: float = math.nan
 
 
 @dataclass
@@ -79,8 +79,8 @@ class Rotors:
 
     # Rotor speed, left rotor positive, right negative (rad/s).
     speed: float = 0.0
-    # Gain of the drive that holds the speed (N m s/rad).
-    drive_gain: float = 50.0
+    # Gain of the drive that holds the speed (N m s/rad); the rotors scenario sets it.
+    drive_gain: float = 0.0
 
 
 @dataclass
@@ -107,8 +107,8 @@ class Scenario:
     rotors: Rotors = field(default_factory=Rotors)
     disturbances: list[Disturbance] = field(default_factory=list)
     # Thresholds of the Assumption 1 (sigma_min(J_3)) and 2 (|f_d|, N) checks.
-    sigma_min_J3_limit: float = 1e-3
-    f_d_limit: float = 1.0
+    sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT
+    f_d_limit: float = F_D_LIMIT
 
     def validate(self) -> "Scenario":
         """Check values; raise ScenarioError naming the field and the fix. Returns self."""
@@ -134,10 +134,22 @@ class Scenario:
         a = self.actuation
         if not a.lag_rise_time >= 0:
             raise ScenarioError("actuation.lag_rise_time must be >= 0 (s)")
-        if not a.thrust_max > a.thrust_min:
-            raise ScenarioError("actuation.thrust_max must exceed actuation.thrust_min")
-        if not a.body_torque_max > 0:
-            raise ScenarioError("actuation.body_torque_max must be > 0 (N m)")
+        if a.saturate and not a.thrust_max > a.thrust_min:
+            raise ScenarioError("actuation.thrust_max must be set and exceed "
+                                f"actuation.thrust_min (N); got {a.thrust_max}")
+        if a.saturate and not a.body_torque_max > 0:
+            raise ScenarioError("actuation.body_torque_max must be set and > 0 (N m); got "
+                                f"{a.body_torque_max}")
+        for name in ("sigma_min_J3_limit", "f_d_limit"):
+            if not getattr(self, name) > 0:
+                raise ScenarioError(f"{name} must be > 0, or the check of the paper's "
+                                    f"assumption can never fire; got {getattr(self, name)}")
+        if self.plant_variant == "rotors" and not self.rotors.drive_gain > 0:
+            raise ScenarioError(f"rotors.drive_gain must be > 0 (N m s/rad); got "
+                                f"{self.rotors.drive_gain}")
+        if self.plant_variant == "rigid" and self.rotors.speed != 0:
+            raise ScenarioError("rotors.speed is set but plant_variant is 'rigid', which has no "
+                                "rotor bodies: use plant_variant: rotors or remove rotors.speed")
         for i, d in enumerate(self.disturbances):
             where = f"disturbances[{i}]"
             if d.target not in DISTURBANCE_TARGETS:
