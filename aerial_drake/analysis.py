@@ -35,9 +35,9 @@ from pydrake.systems.primitives import (
     ConstantVectorSource, ControllabilityMatrix, Demultiplexer, IsControllable, IsStabilizable,
     Linearize, LinearSystem)
 
-from aerial_drake.actuators import make_base_actuator
 from aerial_drake.control import Gains, diagnostics_slices
-from aerial_drake.controller import DecoupledController
+from aerial_drake.controller import DecoupledController, make_controller
+from aerial_drake.diagram import connect_actuation
 from aerial_drake.equilibrium import UnreachablePose, solve_configuration
 from aerial_drake.models import AerialManipulator, add_to_builder, make_plant
 from aerial_drake.reference import ReferenceSample
@@ -200,24 +200,13 @@ class HoverLoop:
         return context
 
 
-def _add_actuation(builder: DiagramBuilder, sim: AerialManipulator, command) -> None:
-    """``command`` = [f, mu, tau] to the plant: thrust and body torques through the base
-    actuator (2), joint torques to the arm's actuation port, unclipped (MultibodyPlant would
-    clip at the effort limits; as in :mod:`aerial_drake.diagram`, the limits are lifted)."""
-    n = len(sim.arm_joints)
-    for actuator in sim.arm_actuators:
-        actuator.set_effort_limit(np.inf)
-    split = builder.AddSystem(Demultiplexer([4, n]))
+def _actuate(builder: DiagramBuilder, sim: AerialManipulator, command) -> None:
+    """``command`` = [f, mu, tau] to the plant, with no hold, lag or saturation."""
+    split = builder.AddSystem(Demultiplexer([4, len(sim.arm_joints)]))
     split.set_name("split_command")
     builder.Connect(command, split.get_input_port())
-    base_actuator = builder.AddSystem(make_base_actuator(sim.base_body))
-    base_actuator.set_name("base_actuator")
-    builder.Connect(split.get_output_port(0), base_actuator.get_command_input_port())
-    builder.Connect(sim.plant.get_body_poses_output_port(),
-                    base_actuator.get_body_poses_input_port())
-    builder.Connect(base_actuator.get_spatial_forces_output_port(),
-                    sim.plant.get_applied_spatial_force_input_port())
-    builder.Connect(split.get_output_port(1), sim.plant.get_actuation_input_port(sim.arm))
+    forces = connect_actuation(builder, sim, split.get_output_port(0), split.get_output_port(1))
+    builder.Connect(forces, sim.plant.get_applied_spatial_force_input_port())
 
 
 def build_hover_loop(eq: HoverEquilibrium, gains: Gains) -> HoverLoop:
@@ -228,10 +217,7 @@ def build_hover_loop(eq: HoverEquilibrium, gains: Gains) -> HoverLoop:
     sim.plant.set_name("plant")
     if sim.plant.num_positions() != model.plant.num_positions():
         raise ValueError("the equilibrium's model and the simulated plant differ in coordinates")
-    controller = builder.AddSystem(DecoupledController(
-        model.plant, model.end_effector_frame,
-        q3_joint_velocity_index=model.arm_joints[2].velocity_start(),
-        q3_joint_position_index=model.arm_joints[2].position_start(), gains=gains))
+    controller = builder.AddSystem(make_controller(model, gains))
     controller.set_name("controller")
     for name, value in zip(("com_reference", "task_reference", "heading_reference"),
                            eq.reference().to_vectors()):
@@ -239,7 +225,7 @@ def build_hover_loop(eq: HoverEquilibrium, gains: Gains) -> HoverLoop:
         source.set_name(name)
         builder.Connect(source.get_output_port(), controller.GetInputPort(name))
     builder.Connect(sim.plant.get_state_output_port(), controller.get_state_input_port())
-    _add_actuation(builder, sim, controller.get_command_output_port())
+    _actuate(builder, sim, controller.get_command_output_port())
     diagram = builder.Build()
     diagram.set_name("hover_loop")
     return HoverLoop(diagram=diagram, plant=sim, controller=controller, equilibrium=eq)
@@ -364,7 +350,7 @@ def linearize_open_loop(eq: HoverEquilibrium) -> LinearSystem:
     sim.plant.set_name("plant")
     inputs = builder.AddSystem(Demultiplexer([4 + len(sim.arm_joints)]))
     inputs.set_name("inputs")
-    _add_actuation(builder, sim, inputs.get_output_port(0))
+    _actuate(builder, sim, inputs.get_output_port(0))
     builder.ExportInput(inputs.get_input_port(), "inputs")
     diagram = builder.Build()
     diagram.set_name("open_loop")

@@ -21,16 +21,11 @@ from aerial_drake.control import (
     DIAGNOSTICS_SIZE, F_D_LIMIT, SIGMA_MIN_J3_LIMIT, AssumptionViolation, ControlOutput,
     GainMatrices, Gains, Reference, TaskKinematics, compute_control)
 from aerial_drake.decoupling import DecoupledDynamics, value_of
+from aerial_drake.models import AerialManipulator
 from aerial_drake.reference import (
     COM_REFERENCE_SIZE, HEADING_REFERENCE_SIZE, TASK_REFERENCE_SIZE, unpack_com_reference,
     unpack_heading_reference, unpack_task_reference)
 
-#: Layout of the ``command`` output: thrust f (N), body torques mu (N m, base frame), joint
-#: torques tau (N m).
-COMMAND_THRUST = slice(0, 1)
-COMMAND_BODY_TORQUES = slice(1, 4)
-COMMAND_BASE = slice(0, 4)
-COMMAND_JOINT_TORQUES = slice(4, None)
 
 
 class _ControllerPorts:
@@ -108,10 +103,6 @@ class _DecoupledControllerBase(_ControllerPorts):
         self.DeclareVectorOutputPort(
             "diagnostics", DIAGNOSTICS_SIZE, self._calc_diagnostics,
             prerequisites_of_calc={self._solution.ticket()})
-
-    @property
-    def model_plant(self) -> MultibodyPlant:
-        return self._plant
 
 
     def solve(self, x: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
@@ -230,3 +221,15 @@ class ZeroController(_ControllerPorts, LeafSystem):
     def _calc_zero(self, context: Context, output: BasicVector) -> None:
         self.evaluations += 1
         output.SetZero()
+
+
+def make_controller(model: AerialManipulator, gains: Gains, *,
+                    sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT,
+                    f_d_limit: float = F_D_LIMIT, zero: bool = False):
+    """The controller on ``model`` (from :mod:`aerial_drake.models`), its task's q3 being the
+    arm's third joint; ``zero=True`` gives the :class:`ZeroController` baseline instead."""
+    controller_type = ZeroController if zero else DecoupledController
+    q3 = model.arm_joints[2]
+    return controller_type(
+        model.plant, model.end_effector_frame, q3.velocity_start(), q3.position_start(), gains,
+        sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit)

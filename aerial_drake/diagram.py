@@ -28,7 +28,7 @@ from pydrake.systems.controllers import PidController
 
 from aerial_drake.actuators import (
     PointWrenchApplier, free_body_wrench_map, lag_time_constant, make_base_actuator)
-from aerial_drake.controller import DecoupledController, ZeroController
+from aerial_drake.controller import DecoupledController, make_controller
 from aerial_drake.disturbances import add_wrench_source
 from aerial_drake.models import ROTOR_DIRECTIONS, AerialManipulator, add_to_builder, make_plant
 from aerial_drake.reference import ReferenceGenerator
@@ -65,6 +65,29 @@ def input_limits(scenario: Scenario, model: AerialManipulator,
     return lower, upper
 
 
+def connect_actuation(builder: DiagramBuilder, sim: AerialManipulator, base_command,
+                      joint_command):
+    """Wire ``[f, mu]`` (``base_command``, 4) and ``tau`` (``joint_command``) to the plant:
+    the thrust and body torques as a body wrench at the helicopter frame (2) through Drake's
+    ``Propeller``, the joint torques to the arm's actuation input. Returns the base wrench's
+    spatial-force output port, for the caller to connect to the plant (alone or multiplexed).
+
+    MultibodyPlant silently clips actuation at the joints' effort limits, even in continuous
+    mode; saturation is ours to model and log (diagram's ``Saturation``, only if the scenario
+    asks), so the simulated plant's own clip is lifted. The limits stay on the controller's
+    model, where ``input_limits`` reads them.
+    """
+    for actuator in sim.arm_actuators:
+        actuator.set_effort_limit(np.inf)
+    base_actuator = builder.AddSystem(make_base_actuator(sim.base_body))
+    base_actuator.set_name("base_actuator")
+    builder.Connect(base_command, base_actuator.get_command_input_port())
+    builder.Connect(sim.plant.get_body_poses_output_port(),
+                    base_actuator.get_body_poses_input_port())
+    builder.Connect(joint_command, sim.plant.get_actuation_input_port(sim.arm))
+    return base_actuator.get_spatial_forces_output_port()
+
+
 def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
                       zero_controller: bool = False) -> ClosedLoop:
     """The closed loop of ``scenario`` as one Diagram with exported disturbance inputs.
@@ -79,21 +102,12 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
     plant.set_name("plant")
     model = make_plant("rigid")
     n = len(model.arm_joints)
-    # MultibodyPlant silently clips actuation at the joints' effort limits, even in continuous
-    # mode. Saturation is ours to model and log (below, and only if the scenario asks), so
-    # lift the plant's own clip; the limits stay on the controller's model for reference.
-    for actuator in sim.arm_actuators:
-        actuator.set_effort_limit(np.inf)
 
     reference = builder.AddSystem(ReferenceGenerator(scenario.trajectory))
     reference.set_name("reference")
-    controller_type = ZeroController if zero_controller else DecoupledController
-    controller = builder.AddSystem(controller_type(
-        model.plant, model.end_effector_frame,
-        q3_joint_velocity_index=model.arm_joints[2].velocity_start(),
-        q3_joint_position_index=model.arm_joints[2].position_start(),
-        gains=scenario.gains, sigma_min_J3_limit=scenario.sigma_min_J3_limit,
-        f_d_limit=scenario.f_d_limit))
+    controller = builder.AddSystem(make_controller(
+        model, scenario.gains, sigma_min_J3_limit=scenario.sigma_min_J3_limit,
+        f_d_limit=scenario.f_d_limit, zero=zero_controller))
     controller.set_name("controller")
     for port in ("com_reference", "task_reference", "heading_reference"):
         builder.Connect(reference.GetOutputPort(port), controller.GetInputPort(port))
@@ -152,11 +166,8 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
     builder.Connect(joint_cmd, applied.get_input_port(1))
     builder.ExportOutput(applied.get_output_port(), "applied_command")
 
-    # (2): thrust along body z and body torques, at the helicopter frame.
-    base_actuator = builder.AddSystem(make_base_actuator(sim.base_body))
-    base_actuator.set_name("base_actuator")
-    builder.Connect(base_cmd, base_actuator.get_command_input_port())
-    builder.Connect(plant.get_body_poses_output_port(), base_actuator.get_body_poses_input_port())
+    # (2): thrust along body z and body torques, at the helicopter frame; joint torques.
+    base_forces = connect_actuation(builder, sim, base_cmd, joint_cmd)
     # Disturbances: at the helicopter frame as a generalized force, at the end effector as a
     # spatial force at the end-effector point.
     heli_wrench = builder.AddSystem(PassThrough(6))
@@ -170,12 +181,11 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
     ee_wrench.set_name("end_effector_wrench")
     forces = builder.AddSystem(ExternallyAppliedSpatialForceMultiplexer(2))
     forces.set_name("spatial_forces")
-    builder.Connect(base_actuator.get_spatial_forces_output_port(), forces.get_input_port(0))
+    builder.Connect(base_forces, forces.get_input_port(0))
     builder.Connect(ee_wrench.get_output_port(), forces.get_input_port(1))
     builder.Connect(forces.get_output_port(), plant.get_applied_spatial_force_input_port())
     builder.ExportInput(heli_wrench.get_input_port(), "helicopter_wrench")
     builder.ExportInput(ee_wrench.get_input_port(), "end_effector_wrench")
-    builder.Connect(joint_cmd, plant.get_actuation_input_port(sim.arm))
 
     if sim.rotor_joints:
         _add_rotor_drive(builder, sim, scenario)
@@ -208,15 +218,6 @@ def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: 
     builder.Connect(desired.get_output_port(), pid.get_input_port_desired_state())
     builder.Connect(pid.get_output_port_control(), plant.get_actuation_input_port(sim.helicopter))
     builder.ExportOutput(pid.get_output_port_control(), "rotor_drive_torque")
-
-
-@dataclass
-class Simulation:
-    """A closed loop with its disturbance sources and loggers, ready to simulate."""
-
-    diagram: Diagram
-    closed_loop: ClosedLoop
-    loggers: dict[str, VectorLogSink]
 
 
 LOGGED_PORTS = ("plant_state", "command", "applied_command", "diagnostics", "com_reference",

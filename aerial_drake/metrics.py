@@ -133,9 +133,3 @@ def limits_by_input(lower: np.ndarray, upper: np.ndarray) -> dict:
 
 def _min_or_none(x: np.ndarray) -> float | None:
     return float(x.min()) if x.size else None
-
-
-def peak(t: np.ndarray, signal: np.ndarray, a: float, b: float) -> float:
-    """max of ``signal`` over ``a <= t <= b``."""
-    mask = (t >= a) & (t <= b)
-    return float(signal[mask].max())

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
@@ -43,7 +43,6 @@ class RunResult:
     completed: bool = True
     failure: str | None = None
     out_dir: Path | None = None
-    extra: dict = field(default_factory=dict)
 
 
 def reference_configuration(scenario: Scenario, model: AerialManipulator,

@@ -11,7 +11,6 @@ from pathlib import Path
 
 from _common import write_graphviz
 
-from aerial_drake.diagram import build_closed_loop
 from aerial_drake.runner import run_scenario
 from aerial_drake.scenarios import load_scenario
 
@@ -23,12 +22,15 @@ def main() -> None:
     parser.add_argument("--out", default="out/diagrams")
     args = parser.parse_args()
     scenario = load_scenario(args.scenario, overrides={"duration": args.duration})
-    loop = build_closed_loop(scenario)
     out = Path(args.out)
-    # Depth 1: the closed loop's blocks (plant, reference, controller, hold, saturation, ...).
-    for path in write_graphviz(loop.diagram, out / f"{scenario.name}_closed_loop"):
-        print(f"wrote {path}")
-    result = run_scenario(scenario, out_dir=out / scenario.name)
+
+    def draw(builder, loop):
+        # Depth 1: the closed loop's blocks (plant, reference, controller, hold, saturation,
+        # actuators), drawn from the diagram that then runs.
+        for path in write_graphviz(loop.diagram, out / f"{scenario.name}_closed_loop"):
+            print(f"wrote {path}")
+
+    result = run_scenario(scenario, out_dir=out / scenario.name, configure=draw)
     print(f"ran {result.metrics['simulated_time_s']:.2f} s; logs in {result.out_dir}")
 
 

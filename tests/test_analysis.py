@@ -11,7 +11,7 @@ import pytest
 from pydrake.autodiffutils import AutoDiffXd, ExtractGradient, ExtractValue, InitializeAutoDiff
 
 from aerial_drake import analysis as dut
-from aerial_drake.controller import DecoupledController, DecoupledController_
+from aerial_drake.controller import DecoupledController_, make_controller
 from aerial_drake.equilibrium import UnreachablePose
 from aerial_drake.models import make_plant
 from aerial_drake.reference import TrajectoryParams, evaluate_reference
@@ -133,9 +133,7 @@ def test_region_of_attraction_small_offsets_converge():
 
 def test_autodiff_controller_matches_double(gains):
     model = make_plant("rigid")
-    ctrl = DecoupledController(model.plant, model.end_effector_frame,
-                               model.arm_joints[2].velocity_start(),
-                               model.arm_joints[2].position_start(), gains)
+    ctrl = make_controller(model, gains)
     ad = ctrl.ToAutoDiffXd()
     assert isinstance(ad, DecoupledController_[AutoDiffXd])
     q = model.plant.GetPositions(model.plant.CreateDefaultContext())

@@ -77,15 +77,13 @@ def test_assumption_2_vanishing_thrust():
     """A free-falling CoM reference with zero error asks for f_d = 0: Assumption 2."""
     import numpy as np
     from aerial_drake.models import make_plant
-    from aerial_drake.controller import DecoupledController
+    from aerial_drake.controller import make_controller
     from aerial_drake.reference import evaluate_reference
     from aerial_drake.runner import reference_configuration
 
     s = load_scenario("nominal")
     model = make_plant("rigid")
-    ctrl = DecoupledController(model.plant, model.end_effector_frame,
-                               model.arm_joints[2].velocity_start(),
-                               model.arm_joints[2].position_start(), s.gains)
+    ctrl = make_controller(model, s.gains)
     q = reference_configuration(s, model)
     com, task, heading = evaluate_reference(s.trajectory, 0.0).to_vectors()
     ctx = model.plant.CreateDefaultContext()
