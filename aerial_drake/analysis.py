@@ -19,6 +19,7 @@
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import json
 import math
@@ -132,7 +133,8 @@ def hover_inputs(model: AerialManipulator, q: np.ndarray) -> tuple[float, np.nda
     return float(force_b[2]), mu, tau, float(np.linalg.norm(force_b[:2]))
 
 
-def hover_equilibrium(p_WG, p_WE, R_WE=None, *, yaw: float = 0.0, q3: float = 0.0,
+def hover_equilibrium(p_WG: np.ndarray, p_WE: np.ndarray, R_WE: np.ndarray | None = None, *,
+                      yaw: float = 0.0, q3: float = 0.0,
                       model: AerialManipulator | None = None,
                       q_guess: np.ndarray | None = None) -> HoverEquilibrium:
     """The hover with the CoM at ``p_WG`` (m), the base level with heading ``yaw`` (rad), the
@@ -833,7 +835,8 @@ def format_report(report: dict) -> str:
                      f"{ol['states'] // 2} velocities; rank [B .. A^k B]: "
                      f"{ol['controllability_rank_growth']}")
     lee = report["lee_conditions"]
-    lines.append(f"Lee et al.: gamma1 = {lee['gamma1']:g} < {min(lee['gamma1_bounds'].values()):.3g}"
+    lines.append(f"Lee et al.: gamma1 = {lee['gamma1']:g} < "
+                 f"{min(lee['gamma1_bounds'].values()):.3g}"
                  f" {'ok' if lee['gamma1_ok'] else 'VIOLATED'}; gamma2 = {lee['gamma2']:g} < "
                  f"{min(lee['gamma2_bounds'].values()):.3g} "
                  f"{'ok' if lee['gamma2_ok'] else 'VIOLATED'} (per axis < "
@@ -851,7 +854,7 @@ def format_report(report: dict) -> str:
     return "\n".join(lines)
 
 
-def cli_analyze(args) -> int:
+def cli_analyze(args: argparse.Namespace) -> int:
     """``aerial-drake analyze [--out DIR] [--scenario NAME] [--fast] [--seed N] [--quiet]``."""
     import sys
 

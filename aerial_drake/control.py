@@ -6,9 +6,10 @@ diagnostics. :mod:`aerial_drake.controller` wraps it in a LeafSystem.
 
 Choices where the paper is silent (also in ``docs/control.md``):
 
-- The task is ``y = [p_E; orientation of E; q3]`` (27). Its velocity is ``y_dot = [v_E; w_E; q3_dot]``
-  (World) and its orientation error is ``e_o = vee(skew(R_E R_ed^T))`` (World), whose derivative
-  at zero error is ``w_E - w_ed``. The task velocity error is velocity-level, ``J xi - y_d_dot`` (17).
+- The task is ``y = [p_E; orientation of E; q3]`` (27). Its velocity is
+  ``y_dot = [v_E; w_E; q3_dot]`` (World) and its orientation error is
+  ``e_o = vee(skew(R_E R_ed^T))`` (World), whose derivative at zero error is ``w_E - w_ed``.
+  The task velocity error is velocity-level, ``J xi - y_d_dot`` (17).
 - The feed-forwards take the CoM acceleration and jerk from the model (9a) and the base angular
   acceleration from the closed loop (16), as the paper suggests.
 - ``V1`` of (25) uses ``k_R / 2 tr(E3 - R_d^T R_b)`` (Lee et al.'s ``k_R Psi``; the paper's

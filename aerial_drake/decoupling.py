@@ -200,7 +200,8 @@ class DecoupledDynamics:
         self.base_body = base_body if base_body is not None else _find_base(plant)
         nv = plant.num_velocities()
         if nv < 7:
-            raise ValueError(f"plant has {nv} velocities; a free base plus at least one joint needed")
+            raise ValueError(f"plant has {nv} velocities; a free base plus at least one joint "
+                             "needed")
         base_joints = [
             plant.get_joint(j) for j in plant.GetJointIndices()
             if plant.get_joint(j).child_body().index() == self.base_body.index()
@@ -232,7 +233,8 @@ class DecoupledDynamics:
             for b in self.bodies
         ])
         # P_i = [-(c_i x), E3] maps a body spatial velocity to its CoM's translational velocity.
-        self._P = np.concatenate([-_hat_batch(self._com_B), np.broadcast_to(_E3, (len(self.bodies), 3, 3))],
+        self._P = np.concatenate([-_hat_batch(self._com_B),
+                                  np.broadcast_to(_E3, (len(self.bodies), 3, 3))],
                                  axis=2)
         self.Q = np.hstack([np.zeros((self.n, 6)), np.eye(self.n)])
         self._world = plant.world_frame()

@@ -175,7 +175,8 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
     to_generalized = builder.AddSystem(MatrixGain(free_body_wrench_map(plant.num_velocities())))
     to_generalized.set_name("helicopter_wrench_to_generalized_force")
     builder.Connect(heli_wrench.get_output_port(), to_generalized.get_input_port())
-    builder.Connect(to_generalized.get_output_port(), plant.get_applied_generalized_force_input_port())
+    builder.Connect(to_generalized.get_output_port(),
+                    plant.get_applied_generalized_force_input_port())
     ee_wrench = builder.AddSystem(PointWrenchApplier(
         sim.end_effector_body, sim.end_effector_frame.GetFixedPoseInBodyFrame().translation()))
     ee_wrench.set_name("end_effector_wrench")

@@ -29,17 +29,8 @@ def wrench_schedule(disturbances: Sequence[Disturbance], target: str,
     return np.array(times), np.array(values)
 
 
-def wrench_at(disturbances: Sequence[Disturbance], target: str, t: float) -> np.ndarray:
-    """The wrench on ``target`` at time ``t`` (for logs and plots)."""
-    w = np.zeros(6)
-    for d in disturbances:
-        if d.target == target and d.start <= t < d.stop:
-            w += np.concatenate([d.torque, d.force])
-    return w
-
-
 def add_wrench_source(builder: DiagramBuilder, disturbances: Sequence[Disturbance],
-                      target: str):
+                      target: str) -> ConstantVectorSource | TrajectorySource:
     """A source system whose output is the disturbance wrench on ``target`` over time."""
     times, values = wrench_schedule(disturbances, target)
     if len(times) == 1:

@@ -6,8 +6,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from pydrake.math import RotationMatrix
+from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from pydrake.multibody.inverse_kinematics import ComPositionConstraint, InverseKinematics
+from pydrake.multibody.tree import JacobianWrtVariable
 from pydrake.solvers import Solve
 
 from aerial_drake.decoupling import vee
@@ -101,7 +102,6 @@ def _newton_polish(manip: AerialManipulator, q: np.ndarray, *, p_WG, R_WB, p_WE,
                    iterations: int = 8) -> np.ndarray:
     """Newton steps on the square system (CoM, EE pose, q3 in base position and joints), with
     the base attitude set exactly: IK's orientation constraints are only met to ~1e-5 rad."""
-    from pydrake.multibody.tree import JacobianWrtVariable
     plant = manip.plant
     ctx = plant.CreateDefaultContext()
     plant.SetPositions(ctx, q)
@@ -140,7 +140,6 @@ def _newton_polish(manip: AerialManipulator, q: np.ndarray, *, p_WG, R_WB, p_WE,
 
 
 def _rpy(R: np.ndarray) -> np.ndarray:
-    from pydrake.math import RollPitchYaw
     return RollPitchYaw(RotationMatrix(R)).vector()
 
 
@@ -172,9 +171,10 @@ def nominal_positions(manip: AerialManipulator, p_WB: np.ndarray, R_WB: np.ndarr
     hover posture (docs/models.md)."""
     plant = manip.plant
     ctx = plant.CreateDefaultContext()
-    from pydrake.math import RigidTransform  # local: only needed here
-    plant.SetFreeBodyPose(ctx, manip.base_body, RigidTransform(RotationMatrix(R_WB), p_WB)) \
-        if manip.floating_base == "quaternion" else _set_rpy_base(manip, ctx, p_WB, R_WB)
+    if manip.floating_base == "quaternion":
+        plant.SetFreeBodyPose(ctx, manip.base_body, RigidTransform(RotationMatrix(R_WB), p_WB))
+    else:
+        _set_rpy_base(manip, ctx, p_WB, R_WB)
     q = plant.GetPositions(ctx)
     q[manip.arm_position_indices] = manip.q_nominal_arm()
     return q

@@ -18,6 +18,7 @@ disturbed's, from the one generator (so ``run nominal --seed N`` starts where ``
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import json
 import sys
@@ -187,7 +188,7 @@ def format_table(metrics: dict[str, dict]) -> str:
     return "\n".join(lines)
 
 
-def cli_run(args) -> int:
+def cli_run(args: argparse.Namespace) -> int:
     """``aerial-drake run paper [--duration S] [--out DIR] [--seed N] [--quiet] [--json]``."""
     out = Path(args.out) / "paper"
     print(f"running the paper's scenarios {PAPER_SCENARIOS} -> {out}")

@@ -22,8 +22,8 @@ from aerial_drake.equilibrium import solve_configuration
 from aerial_drake.metrics import (
     compute_metrics, disturbance_response, limits_by_input, phase_edges, rotor_metrics)
 from aerial_drake.models import ROTOR_DIRECTIONS, AerialManipulator
-from aerial_drake.reference import evaluate_reference
-from aerial_drake.scenarios import Scenario
+from aerial_drake.reference import evaluate_reference, sample_reference
+from aerial_drake.scenarios import Scenario, ScenarioError
 
 
 class SimulationFailed(RuntimeError):
@@ -77,8 +77,6 @@ def check_workspace(scenario: Scenario, model: AerialManipulator, *,
     (x_d = x_c + R3(phi4) r_o, (33)); the task is feasible while the desired offset
     R3(phi4)^T (p_ed - x_d) stays within ``radius`` of the model's nominal one.
     """
-    from aerial_drake.reference import sample_reference
-    from aerial_drake.scenarios import ScenarioError
     plant = model.plant
     ctx = plant.CreateDefaultContext()
     X_WB = plant.EvalBodyPoseInWorld(ctx, model.base_body)

@@ -186,7 +186,8 @@ def test_model_files_need_no_network():
         text = path.read_text()
         assert "drake_models" not in text, path
         # XML namespace names are identifiers, not downloads.
-        names = text.replace("http://www.ros.org", "").replace('xmlns:drake="http://drake.mit.edu"', "")
+        names = (text.replace("http://www.ros.org", "")
+                 .replace('xmlns:drake="http://drake.mit.edu"', ""))
         assert "http" not in names, path
         for url in text.split("package://")[1:]:
             assert url.startswith("aerial_drake/"), path

@@ -91,7 +91,8 @@ def test_assumption_2_vanishing_thrust():
     com = np.zeros(15)
     com[:3] = model.plant.CalcCenterOfMassPositionInWorld(ctx)
     com[8] = -9.81  # x_d'' = -g e3
-    with pytest.raises(AssumptionViolation, match=r"Assumption 2 violated: the desired thrust vanishes, \|f_d\| = [-+.e0-9]+ N"):
+    with pytest.raises(AssumptionViolation, match=r"Assumption 2 violated: the desired thrust "
+                                                  r"vanishes, \|f_d\| = [-+.e0-9]+ N"):
         ctrl.solve(np.concatenate([q, np.zeros(13)]), com, task, heading)
 
 
