@@ -17,6 +17,16 @@ _ERRORS = {
 }
 
 
+#: The paper allows saturation "in a very short initial time interval": the saturated time
+#: after this instant (s) is reported on its own.
+SATURATION_GRACE_S = 0.5
+
+
+def saturated_after_key(grace: float = SATURATION_GRACE_S) -> str:
+    """The metrics.json key of the saturated time after ``grace`` seconds."""
+    return f"saturated_s_after_{grace:g}s"
+
+
 def phase_edges(disturbance_windows: list[tuple[float, float]], duration: float) -> list[float]:
     """Phase boundaries: 0, every window edge inside the run, and the end."""
     inner = sorted({t for w in disturbance_windows for t in w if 0.0 < t < duration})
@@ -25,7 +35,7 @@ def phase_edges(disturbance_windows: list[tuple[float, float]], duration: float)
 
 def compute_metrics(t: np.ndarray, diagnostics: np.ndarray, applied: np.ndarray,
                     lower: np.ndarray, upper: np.ndarray, edges: list[float],
-                    log_period: float, saturation_grace: float = 0.5) -> dict:
+                    log_period: float, saturation_grace: float = SATURATION_GRACE_S) -> dict:
     """Per-phase RMS/max errors, assumption margins and saturated time.
 
     Args:
@@ -57,7 +67,7 @@ def compute_metrics(t: np.ndarray, diagnostics: np.ndarray, applied: np.ndarray,
         "phases": phases,
         "saturated_s_total": dict(zip(INPUT_NAMES,
                                       (at_limit.sum(axis=0) * log_period).tolist())),
-        f"saturated_s_after_{saturation_grace:g}s": dict(
+        saturated_after_key(saturation_grace): dict(
             zip(INPUT_NAMES, (at_limit[late].sum(axis=0) * log_period).tolist())),
         # None when nothing was logged (a run stopped at t = 0).
         "min_sigma_min_J3": _min_or_none(diagnostics[:, sl["sigma_min_J3"]]),

@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from aerial_drake.metrics import saturated_after_key
 from aerial_drake.plots import Run, load_run, write_figures
 from aerial_drake.runner import SimulationFailed, run_scenario
 from aerial_drake.scenarios import Scenario, ScenarioError, load_scenario
@@ -162,7 +163,7 @@ def format_table(metrics: dict[str, dict]) -> str:
         row("  ratio EE / CoM",
             lambda m: f"{m['disturbance_response'][w]['ee_to_com_peak_ratio']:.4f}")
     # Saturated time: one row per input that sat at a limit in any run.
-    late = "saturated_s_after_0.5s"
+    late = saturated_after_key()
     saturated = [k for k in dict.fromkeys(k for m in metrics.values()
                                           for k in m.get("saturated_s_total", {}))
                  if any(m.get("saturated_s_total", {}).get(k, 0) > 0 for m in metrics.values())]

@@ -20,10 +20,10 @@ from pydrake.systems.framework import EventStatus, LeafSystem
 from aerial_drake.runner import run_scenario
 from aerial_drake.scenarios import load_scenario
 from aerial_drake.screenshot import colourful_fraction, screenshot
-from aerial_drake.visualization import MeshcatView
+from aerial_drake.visualization import PUBLISH_PERIOD, MeshcatView
 
 #: The snapshot system checks the times on this grid (s); a multiple of the 1 ms steps.
-TICK = 0.02
+TICK = PUBLISH_PERIOD  # shots fall on the overlay's frames
 
 
 class Snapshots(LeafSystem):
