@@ -40,7 +40,8 @@ from aerial_drake.control import Gains, diagnostics_slices
 from aerial_drake.controller import DecoupledController, make_controller
 from aerial_drake.diagram import connect_actuation
 from aerial_drake.equilibrium import UnreachablePose, solve_configuration
-from aerial_drake.models import AerialManipulator, add_to_builder, make_plant
+from aerial_drake.models import (
+    AerialManipulator, add_to_builder, make_plant, nominal_end_effector_offset)
 from aerial_drake.reference import ReferenceSample
 from aerial_drake.scenarios import Scenario, load_scenario
 
@@ -52,8 +53,33 @@ __all__ = [
     "trajectory_accel_bound", "lyapunov_scenario", "lyapunov_study", "LyapunovResult",
     "ROA_UNIT", "region_of_attraction", "RegionOfAttraction", "analyze", "figure_eigenvalues",
     "figure_lyapunov", "figure_region_of_attraction", "format_eigenvalue_table",
-    "format_report", "cli_analyze", "FULL_SETTINGS", "FAST_SETTINGS",
+    "format_report", "cli_analyze", "AnalysisSettings", "FULL_SETTINGS", "FAST_SETTINGS",
 ]
+
+
+# --- Settings -------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class AnalysisSettings:
+    """The Lyapunov and region-of-attraction studies' settings. The defaults are the full
+    study (``aerial-drake analyze``, about 3 minutes on two cores) and the defaults of
+    :func:`lyapunov_scenario`, :func:`lyapunov_study` and :func:`region_of_attraction`;
+    :meth:`fast` is ``--fast`` (a smoke test: the error-controlled integrator's first 0.1 s
+    at 1e-8 alone costs ~10 s)."""
+
+    lyapunov_duration: float = 2.0  # s
+    lyapunov_accuracy: float = 1e-8  # runge_kutta3's error-control accuracy
+    roa_scales: tuple[float, ...] = (1.0, 2.0, 4.0, 6.0, 8.0)  # offset sizes (ROA_UNIT)
+    roa_samples: int = 6  # runs per size
+    roa_duration: float = 1.0  # s, per run
+
+    @classmethod
+    def fast(cls) -> AnalysisSettings:
+        return cls(lyapunov_duration=0.1, lyapunov_accuracy=1e-6, roa_scales=(1.0, 6.0),
+                   roa_samples=1, roa_duration=0.2)
+
+
+FULL_SETTINGS = AnalysisSettings()
+FAST_SETTINGS = AnalysisSettings.fast()
 
 
 # --- Hover equilibrium ----------------------------------------------------------------------
@@ -168,8 +194,9 @@ def hover_equilibrium(p_WG: np.ndarray, p_WE: np.ndarray, R_WE: np.ndarray | Non
 
 
 def default_equilibria(model: AerialManipulator | None = None) -> dict[str, HoverEquilibrium]:
-    """Two hovers used by the analysis and the tests: ``"nominal"`` (the end effector 0.3 m
-    ahead of and 0.6 m below the CoM, R_WE = I, the mount's design pose) and ``"turned"``
+    """Two hovers used by the analysis and the tests: ``"nominal"`` (the end effector at the
+    model's nominal offset from the CoM, :func:`nominal_end_effector_offset`: 0.3 m ahead
+    and 0.6 m below, R_WE = I, the mount's design pose) and ``"turned"``
     (heading 0.7 rad, the end effector moved and tilted, q3 = 0.2 rad)."""
     model = model if model is not None else make_plant("rigid", floating_base="rpy")
     p_WG = np.array([0.0, 0.0, 2.0])
@@ -177,7 +204,8 @@ def default_equilibria(model: AerialManipulator | None = None) -> dict[str, Hove
     R_yaw = RotationMatrix.MakeZRotation(yaw)
     turned_R_WE = (R_yaw @ RotationMatrix(RollPitchYaw(0.3, -0.2, 0.1))).matrix()
     return {
-        "nominal": hover_equilibrium(p_WG, p_WG + [0.3, 0.0, -0.6], np.eye(3), model=model),
+        "nominal": hover_equilibrium(p_WG, p_WG + nominal_end_effector_offset(model),
+                                     np.eye(3), model=model),
         "turned": hover_equilibrium(p_WG, p_WG + R_yaw.matrix() @ [0.35, 0.1, -0.55],
                                     turned_R_WE, yaw=yaw, q3=0.2, model=model),
     }
@@ -488,8 +516,10 @@ def lee_conditions(gains: Gains, m: float, *, accel_bound: float, psi1: float = 
     }
 
 
-def lyapunov_scenario(base: Scenario | str = "nominal", *, duration: float = 2.0,
-                      accuracy: float = 1e-8, max_step_size: float = 1e-3) -> Scenario:
+def lyapunov_scenario(base: Scenario | str = "nominal", *,
+                      duration: float = FULL_SETTINGS.lyapunov_duration,
+                      accuracy: float = FULL_SETTINGS.lyapunov_accuracy,
+                      max_step_size: float = 1e-3) -> Scenario:
     """``base`` without disturbances, with continuous feedback (``controller_period: 0``), no
     lag, no saturation, and Drake's error-controlled ``runge_kutta3`` at ``accuracy``."""
     scenario = load_scenario(base) if isinstance(base, str) else base
@@ -534,8 +564,9 @@ class LyapunovResult:
         return out
 
 
-def lyapunov_study(base: Scenario | str = "nominal", *, duration: float = 2.0,
-                   accuracy: float = 1e-8, gamma1: float | None = None,
+def lyapunov_study(base: Scenario | str = "nominal", *,
+                   duration: float = FULL_SETTINGS.lyapunov_duration,
+                   accuracy: float = FULL_SETTINGS.lyapunov_accuracy, gamma1: float | None = None,
                    gamma2: float | None = None) -> LyapunovResult:
     """``V``, ``V1`` and ``V_task`` of (24)-(25) along :func:`lyapunov_scenario`'s run
     (the controller's diagnostics at the log period). ``gamma1``, ``gamma2`` override the
@@ -559,11 +590,13 @@ def lyapunov_study(base: Scenario | str = "nominal", *, duration: float = 2.0,
 
 
 def trajectory_accel_bound(scenario: Scenario, m: float, samples: int = 2001) -> float:
-    """``max |m x_d'' + m g e3|`` over the scenario's trajectory (Assumption 3's bound)."""
+    """``max |m x_d'' + m g e3|`` over the scenario's trajectory (Assumption 3's bound), g
+    from the plant's gravity field."""
     from aerial_drake.reference import sample_reference
     t = np.linspace(0.0, scenario.duration, samples)
     ref = sample_reference(scenario.trajectory, t)
-    acc = np.asarray(ref.com)[:, 2, :] + [0.0, 0.0, 9.81]
+    gravity = make_plant("rigid").plant.gravity_field().gravity_vector()
+    acc = np.asarray(ref.com)[:, 2, :] - gravity
     return float(m * np.linalg.norm(acc, axis=1).max())
 
 
@@ -604,8 +637,10 @@ def _unit_vector(rng: np.random.Generator, n: int) -> np.ndarray:
 
 
 def region_of_attraction(base: Scenario | str = "nominal", *,
-                         scales=(1.0, 2.0, 4.0, 6.0, 8.0), samples: int = 6,
-                         duration: float = 1.0, min_decay_rate: float = 1.0, seed: int = 0,
+                         scales=FULL_SETTINGS.roa_scales,
+                         samples: int = FULL_SETTINGS.roa_samples,
+                         duration: float = FULL_SETTINGS.roa_duration,
+                         min_decay_rate: float = 1.0, seed: int = 0,
                          ) -> RegionOfAttraction:
     """Run ``base`` (its sampling, saturation and integrator; disturbances removed) from
     ``samples`` random initial offsets at each scale s: base position, base roll-pitch-yaw
@@ -671,12 +706,11 @@ def _json_default(x):
 
 
 def analyze(out_dir: str | Path = "out/analysis", *, scenario: str = "nominal",
-            lyapunov_duration: float = 2.0, lyapunov_accuracy: float = 1e-8,
-            roa_scales=(1.0, 2.0, 4.0, 6.0, 8.0),
-            roa_samples: int = 6, roa_duration: float = 1.0, seed: int = 0,
+            settings: AnalysisSettings = FULL_SETTINGS, seed: int = 0,
             stream=None) -> dict:
     """Equilibria, linearisations, eigenvalue tables, open-loop controllability, Lee's
-    conditions, the Lyapunov study and the region-of-attraction study of ``scenario``'s gains;
+    conditions, the Lyapunov study and the region-of-attraction study (``settings``) of
+    ``scenario``'s gains;
     writes ``analysis.json``, ``eigenvalues.png``, ``lyapunov.png`` and
     ``region_of_attraction.png`` to ``out_dir`` and returns the JSON content."""
     out = Path(out_dir)
@@ -703,14 +737,15 @@ def analyze(out_dir: str | Path = "out/analysis", *, scenario: str = "nominal",
     m = make_plant("rigid").total_mass()
     report["lee_conditions"] = lee_conditions(sc.gains, m,
                                               accel_bound=trajectory_accel_bound(sc, m))
-    say(f"Lyapunov study: {lyapunov_duration:g} s, continuous feedback, runge_kutta3 "
-        f"{lyapunov_accuracy:g}")
-    lyap = lyapunov_study(sc, duration=lyapunov_duration, accuracy=lyapunov_accuracy)
+    st = settings
+    say(f"Lyapunov study: {st.lyapunov_duration:g} s, continuous feedback, runge_kutta3 "
+        f"{st.lyapunov_accuracy:g}")
+    lyap = lyapunov_study(sc, duration=st.lyapunov_duration, accuracy=st.lyapunov_accuracy)
     report["lyapunov"] = lyap.summary()
-    say(f"region of attraction: {len(roa_scales)} sizes x {roa_samples} runs of "
-        f"{roa_duration:g} s")
-    roa = region_of_attraction(sc, scales=roa_scales, samples=roa_samples,
-                               duration=roa_duration, seed=seed)
+    say(f"region of attraction: {len(st.roa_scales)} sizes x {st.roa_samples} runs of "
+        f"{st.roa_duration:g} s")
+    roa = region_of_attraction(sc, scales=st.roa_scales, samples=st.roa_samples,
+                               duration=st.roa_duration, seed=seed)
     report["region_of_attraction"] = roa.summary()
     figures = {"eigenvalues.png": figure_eigenvalues(lins), "lyapunov.png": figure_lyapunov(lyap),
                "region_of_attraction.png": figure_region_of_attraction(roa)}
@@ -796,12 +831,6 @@ def figure_region_of_attraction(result: RegionOfAttraction):
 
 
 # --- Command line ---------------------------------------------------------------------------
-#: ``aerial-drake analyze`` settings (about 3 minutes on two cores) and ``--fast`` ones (a
-#: smoke test: the error-controlled integrator's first 0.1 s at 1e-8 alone costs ~10 s).
-FULL_SETTINGS = {"lyapunov_duration": 2.0, "lyapunov_accuracy": 1e-8,
-                 "roa_scales": (1.0, 2.0, 4.0, 6.0, 8.0), "roa_samples": 6, "roa_duration": 1.0}
-FAST_SETTINGS = {"lyapunov_duration": 0.1, "lyapunov_accuracy": 1e-6, "roa_scales": (1.0, 6.0),
-                 "roa_samples": 1, "roa_duration": 0.2}
 
 
 def format_eigenvalue_table(rows: list[dict]) -> str:
@@ -861,8 +890,8 @@ def cli_analyze(args: argparse.Namespace) -> int:
     from aerial_drake.scenarios import ScenarioError
     settings = FAST_SETTINGS if args.fast else FULL_SETTINGS
     try:
-        report = analyze(args.out, scenario=args.scenario, seed=args.seed,
-                         stream=None if args.quiet else sys.stdout, **settings)
+        report = analyze(args.out, scenario=args.scenario, settings=settings, seed=args.seed,
+                         stream=None if args.quiet else sys.stdout)
     except (ScenarioError, UnreachablePose) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2

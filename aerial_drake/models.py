@@ -24,10 +24,11 @@ Coordinate order (Drake's, checked by ``tests/test_models.py``):
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
-from pydrake.geometry import SceneGraph
+from pydrake.geometry import Box, Capsule, Cylinder, Role, SceneGraph, Shape, Sphere
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.parsing import LoadModelDirectives, Parser, ProcessModelDirectives
 from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
@@ -269,6 +270,18 @@ def make_plant(
     return add_aerial_manipulator(plant, variant, floating_base=floating_base)
 
 
+def nominal_end_effector_offset(model: AerialManipulator) -> np.ndarray:
+    """p_GE in B [m]: the end effector's position (frame E's origin) minus the system's centre
+    of mass, in the helicopter frame B, at the plant's default positions (the helicopter level
+    and the arm at q_nominal, as ``make_plant()`` builds it): about (0.3, 0, -0.6) m."""
+    plant = model.plant
+    ctx = plant.CreateDefaultContext()
+    X_WB = plant.EvalBodyPoseInWorld(ctx, model.base_body)
+    return X_WB.rotation().inverse() @ (
+        model.end_effector_frame.CalcPoseInWorld(ctx).translation()
+        - plant.CalcCenterOfMassPositionInWorld(ctx))
+
+
 def add_to_builder(
     builder: DiagramBuilder,
     variant: str = "rigid",
@@ -283,6 +296,59 @@ def add_to_builder(
     return add_aerial_manipulator(
         plant, variant, floating_base=floating_base, scene_graph=scene_graph
     )
+
+
+@dataclass(frozen=True)
+class HelicopterExtent:
+    """A vertical cylinder about the system's centre of mass G that holds the helicopter's
+    illustration geometry at the nominal posture (helicopter level, arm at q_nominal) [m]."""
+
+    radius: float  # largest horizontal distance from the vertical through G
+    top: float  # highest point above G (the outer rims of the tilted rotor discs)
+    bottom: float  # lowest point below G (the skids), positive
+
+
+def _shape_points(shape: Shape, n: int = 72) -> np.ndarray:
+    """Points (N, 3) in the shape's frame whose convex hull holds ``shape``: the corners of a
+    box; two rims of ``n`` points of a cylinder (of a capsule or sphere: of the cylinder about
+    it, which bounds it)."""
+    if isinstance(shape, Box):
+        signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+        return signs * (shape.size() / 2)
+    if isinstance(shape, (Cylinder, Capsule, Sphere)):
+        r = shape.radius()
+        half = 0.0 if isinstance(shape, Sphere) else shape.length() / 2
+        if not isinstance(shape, Cylinder):
+            half += r
+        a = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+        rim = np.column_stack([r * np.cos(a), r * np.sin(a), np.zeros(n)])
+        return np.vstack([rim - [0.0, 0.0, half], rim + [0.0, 0.0, half]])
+    raise TypeError(f"helicopter_extent: no bounding points for a {type(shape).__name__}")
+
+
+@functools.lru_cache(maxsize=None)
+def helicopter_extent(variant: str = "rigid") -> HelicopterExtent:
+    """The :class:`HelicopterExtent` of ``variant``, from the shapes and poses of the
+    helicopter bodies' illustration geometry (SceneGraph's model inspector) at the plant's
+    default positions (rotor angles 0). For the shipped models about: radius 1.39 m (the rotor
+    discs, 1.27 m in radius about hubs 0.15 m off the centre line, tilted 12.5 deg outward),
+    top 0.64 m (their outer rims), bottom 0.41 m (the skids)."""
+    builder = DiagramBuilder()
+    model = add_to_builder(builder, variant)
+    plant, inspector = model.plant, model.scene_graph.model_inspector()
+    ctx = plant.CreateDefaultContext()
+    X_BW = plant.EvalBodyPoseInWorld(ctx, model.base_body).inverse()
+    p_BG = X_BW @ plant.CalcCenterOfMassPositionInWorld(ctx)
+    points = []
+    for index in plant.GetBodyIndices(model.helicopter):
+        X_BA = X_BW @ plant.EvalBodyPoseInWorld(ctx, plant.get_body(index))
+        frame = plant.GetBodyFrameIdOrThrow(index)
+        for geometry in inspector.GetGeometries(frame, Role.kIllustration):
+            X_BS = X_BA @ inspector.GetPoseInFrame(geometry)
+            points.append(X_BS.multiply(_shape_points(inspector.GetShape(geometry)).T).T)
+    p_GP = np.vstack(points) - p_BG
+    return HelicopterExtent(radius=float(np.linalg.norm(p_GP[:, :2], axis=1).max()),
+                            top=float(p_GP[:, 2].max()), bottom=float(-p_GP[:, 2].min()))
 
 
 def set_nominal_posture(

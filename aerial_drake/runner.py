@@ -21,7 +21,8 @@ from aerial_drake.diagram import ClosedLoop, build_simulation, input_limits
 from aerial_drake.equilibrium import solve_configuration
 from aerial_drake.metrics import (
     compute_metrics, disturbance_response, limits_by_input, phase_edges, rotor_metrics)
-from aerial_drake.models import ROTOR_DIRECTIONS, AerialManipulator
+from aerial_drake.models import (
+    ROTOR_DIRECTIONS, AerialManipulator, nominal_end_effector_offset)
 from aerial_drake.reference import evaluate_reference, sample_reference
 from aerial_drake.scenarios import Scenario, ScenarioError
 
@@ -77,12 +78,7 @@ def check_workspace(scenario: Scenario, model: AerialManipulator, *,
     (x_d = x_c + R3(phi4) r_o, (33)); the task is feasible while the desired offset
     R3(phi4)^T (p_ed - x_d) stays within ``radius`` of the model's nominal one.
     """
-    plant = model.plant
-    ctx = plant.CreateDefaultContext()
-    X_WB = plant.EvalBodyPoseInWorld(ctx, model.base_body)
-    nominal = X_WB.rotation().inverse() @ (
-        model.end_effector_frame.CalcPoseInWorld(ctx).translation()
-        - plant.CalcCenterOfMassPositionInWorld(ctx))
+    nominal = nominal_end_effector_offset(model)
     times = np.linspace(0.0, scenario.duration, int(scenario.duration * rate) + 1)
     ref = sample_reference(scenario.trajectory, times)
     offset = ref.p_ed - ref.com[:, 0]

@@ -56,7 +56,7 @@ from pydrake.systems.framework import Context, DiagramBuilder, EventStatus, Leaf
 
 from aerial_drake.control import desired_attitude, desired_force
 from aerial_drake.diagram import ClosedLoop
-from aerial_drake.models import AerialManipulator, make_plant
+from aerial_drake.models import AerialManipulator, helicopter_extent, make_plant
 from aerial_drake.reference import (
     COM_REFERENCE_SIZE, HEADING_REFERENCE_SIZE, TASK_REFERENCE_SIZE, sample_reference,
     unpack_com_reference, unpack_heading_reference, unpack_task_reference)
@@ -157,14 +157,19 @@ CAMERA_FILL = 0.9
 
 def robot_envelope(scenario: Scenario) -> np.ndarray:
     """Points (N, 3) the robot reaches over the run if it tracks: the desired end-effector
-    path, and about each desired CoM the skids (0.45 m below) and a ring of the rotor discs'
-    rims (1.27 m out, 0.35 m up; the rotors' hubs are 0.35 m over the CoM)."""
+    path, and about each desired CoM the helicopter's lowest point (the skids) and a ring at
+    its highest (the rotor discs' outer rims) as wide as the helicopter, both from the model
+    (:func:`aerial_drake.models.helicopter_extent` of the scenario's plant variant: the
+    helicopter level at the nominal posture; the ring holds any heading)."""
+    extent = helicopter_extent(scenario.plant_variant)
     times = np.linspace(0.0, scenario.duration, int(scenario.duration * PATH_RATE / 5) + 2)
     ref = sample_reference(scenario.trajectory, times)
     G = ref.com[:, 0]
     angles = np.linspace(0.0, 2 * np.pi, 12, endpoint=False)
-    rim = np.column_stack([1.27 * np.cos(angles), 1.27 * np.sin(angles), np.full(12, 0.35)])
-    return np.vstack([ref.p_ed, G - [0.0, 0.0, 0.45], (G[:, None, :] + rim).reshape(-1, 3)])
+    rim = np.column_stack([extent.radius * np.cos(angles), extent.radius * np.sin(angles),
+                           np.full(12, extent.top)])
+    return np.vstack([ref.p_ed, G - [0.0, 0.0, extent.bottom],
+                      (G[:, None, :] + rim).reshape(-1, 3)])
 
 
 def view_coordinates(camera: np.ndarray, target: np.ndarray, points: np.ndarray) -> np.ndarray:

@@ -93,12 +93,6 @@ def test_disturbances_stay_bounded_and_reconverge(nominal):
             assert max_after(nominal, diag, end - 0.5, end) < 0.05 * peak, (window, key)
 
 
-def test_helicopter_push_barely_moves_the_end_effector(nominal):
-    """Fig. 3's point: the 50 N push on the helicopter (4-5 s) hardly affects the end effector."""
-    w = next(p for p in nominal.metrics["phases"] if p["start_s"] == 4.0)
-    assert w["ee_position_error_m"]["max"] < 0.2 * w["com_position_error_m"]["max"]
-
-
 def test_metrics_file(nominal):
     m = json.loads((nominal.out_dir / "metrics.json").read_text())
     assert m["completed"] is True and m["failure"] is None
@@ -111,8 +105,7 @@ def test_metrics_file(nominal):
         assert phase["min_sigma_min_J3"] > 0.05
         assert phase["min_f_d_norm_N"] > 100.0
         assert set(phase["saturated_s"]) == set(INPUT_NAMES)
-    # The paper: inputs saturate only in a short initial interval.
-    assert all(v == 0.0 for v in m["saturated_s_after_0.5s"].values())
+    # That inputs saturate only in the first 0.5 s: tests/test_paper.py.
     assert m["real_time_factor"] > 0 and m["wall_time_s"] > 0
     assert m["controller_evaluations"] == pytest.approx(15001, abs=2)
     log = np.load(nominal.out_dir / "log.npz")
