@@ -125,6 +125,11 @@ def _prime_held_inputs(loop: ClosedLoop, context: Context) -> None:
                                           cmd[:4])
 
 
+def _is_terminal(stream) -> bool:
+    isatty = getattr(stream, "isatty", None)
+    return bool(isatty and isatty())
+
+
 class _Progress:
     """Prints simulated time, wall time and real-time factor every ``every`` simulated seconds,
     and stops the simulation on a non-finite state."""
@@ -133,6 +138,9 @@ class _Progress:
                  stream) -> None:
         self.diagram, self.loop, self.duration = diagram, loop, duration
         self.every, self.stream = every, stream
+        # On a terminal the line rewrites itself; in a log file each report is its own line.
+        self._end = "" if stream is not None and _is_terminal(stream) else "\n"
+        self._start = "\r" if not self._end else ""
         self.next_print = every
         self.start = time.perf_counter()
         self.failure: str | None = None
@@ -141,8 +149,9 @@ class _Progress:
         t = root_context.get_time()
         if self.stream is not None and t >= self.next_print - 1e-9:
             wall = time.perf_counter() - self.start
-            self.stream.write(f"\r  t = {t:6.2f} / {self.duration:g} s   wall {wall:6.1f} s   "
-                              f"real-time factor {t / max(wall, 1e-9):5.1f}x")
+            self.stream.write(f"{self._start}  t = {t:6.2f} / {self.duration:g} s   wall "
+                              f"{wall:6.1f} s   real-time factor {t / max(wall, 1e-9):5.1f}x"
+                              f"{self._end}")
             self.stream.flush()
             self.next_print += self.every
         x = self.loop.plant_model.plant.GetPositionsAndVelocities(
@@ -200,8 +209,8 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
         failure = f"interrupted (Ctrl-C) at t = {context.get_time():.3f} s"
         interrupted = True
     wall = time.perf_counter() - start
-    if progress:
-        stream.write("\n")
+    if progress and _is_terminal(stream):
+        stream.write("\n")  # end the self-rewriting progress line
     log = {port: logger.FindLog(context) for port, logger in loggers.items()}
     arrays = {"t": log["plant_state"].sample_times()}
     for port, entry in log.items():
