@@ -106,3 +106,21 @@ def test_rotor_speed_on_the_rigid_plant_is_an_error(tmp_path):
     text = shipped_scenarios()["nominal"].read_text() + "rotors:\n  speed: 81.0\n"
     with pytest.raises(ScenarioError, match="rotors.speed is set but plant_variant is 'rigid'"):
         load_scenario(write(tmp_path, text))
+
+
+def test_cli_reports_a_workspace_error_before_simulating(tmp_path, capsys):
+    from aerial_drake import cli
+
+    text = shipped_scenarios()["nominal"].read_text().replace("agile_amplitude: 0.1",
+                                                               "agile_amplitude: 0.4")
+    code = cli.main(["run", str(write(tmp_path, text)), "--out", str(tmp_path), "--quiet"])
+    assert code == 2
+    assert "leaves the arm's workspace" in capsys.readouterr().err
+    assert not list(tmp_path.glob("*/log.npz"))
+
+
+def test_cli_paper_refuses_viewer_options(capsys):
+    from aerial_drake import cli
+
+    assert cli.main(["run", "paper", "--meshcat"]) == 2
+    assert "watch one scenario" in capsys.readouterr().err
