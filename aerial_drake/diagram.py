@@ -40,7 +40,7 @@ class ClosedLoop:
     """The closed-loop diagram and handles into it."""
 
     diagram: Diagram
-    plant_model: AerialManipulator  # the simulated plant (inside ``diagram``)
+    simulated_plant: AerialManipulator  # the simulated plant (inside ``diagram``)
     controller_model: AerialManipulator  # the controller's own rigid model
     controller: DecoupledController
     reference: ReferenceGenerator
@@ -195,7 +195,7 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
     builder.ExportOutput(sim.scene_graph.get_query_output_port(), "query_object")
     diagram = builder.Build()
     diagram.set_name(name)
-    return ClosedLoop(diagram=diagram, plant_model=sim, controller_model=model,
+    return ClosedLoop(diagram=diagram, simulated_plant=sim, controller_model=model,
                       controller=controller, reference=reference, zoh=zoh, lag=lag, n_arm=n)
 
 

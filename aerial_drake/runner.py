@@ -99,7 +99,7 @@ def check_workspace(scenario: Scenario, model: AerialManipulator, *,
 def set_initial_state(scenario: Scenario, loop: ClosedLoop, plant_context: Context) -> None:
     """The reference configuration at t = 0 with the scenario's documented offsets, at rest
     (rotors, if any, already at speed)."""
-    model, sim = loop.controller_model, loop.plant_model
+    model, sim = loop.controller_model, loop.simulated_plant
     q_model = reference_configuration(scenario, model)
     ctx = model.plant.CreateDefaultContext()
     model.plant.SetPositions(ctx, q_model)
@@ -154,8 +154,8 @@ class _Progress:
                               f"{self._end}")
             self.stream.flush()
             self.next_print += self.every
-        x = self.loop.plant_model.plant.GetPositionsAndVelocities(
-            self.loop.plant_model.plant.GetMyContextFromRoot(root_context))
+        x = self.loop.simulated_plant.plant.GetPositionsAndVelocities(
+            self.loop.simulated_plant.plant.GetMyContextFromRoot(root_context))
         if not np.all(np.isfinite(x)):
             self.failure = f"t = {t:.4f} s: the plant state became non-finite (diverged)"
             return EventStatus.Failed(self.diagram, self.failure)
@@ -189,7 +189,7 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     if realtime_rate is not None:
         simulator.set_target_realtime_rate(realtime_rate)
     context = simulator.get_mutable_context()
-    plant_context = loop.plant_model.plant.GetMyMutableContextFromRoot(context)
+    plant_context = loop.simulated_plant.plant.GetMyMutableContextFromRoot(context)
     set_initial_state(scenario, loop, plant_context)
     monitor = _Progress(diagram, loop, scenario.duration, every=1.0,
                         stream=stream if progress else None)
@@ -247,7 +247,7 @@ def _metrics(scenario: Scenario, loop: ClosedLoop, log: dict, wall: float,
             log["t"], log["diagnostics"],
             [(d.target, d.start, d.stop) for d in scenario.disturbances]),
     })
-    sim = loop.plant_model
+    sim = loop.simulated_plant
     if sim.rotor_joints and "rotor_drive_torque" in log:
         nq = sim.plant.num_positions()
         metrics["rotors"] = rotor_metrics(

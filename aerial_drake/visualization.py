@@ -224,7 +224,7 @@ class TrackingOverlay(LeafSystem):
     this system's own context, fed with the simulated state mapped by ``rigid_state_indices``.
     """
 
-    def __init__(self, meshcat: Meshcat, scenario: Scenario, plant_model: AerialManipulator,
+    def __init__(self, meshcat: Meshcat, scenario: Scenario, simulated_plant: AerialManipulator,
                  *, publish_period: float = PUBLISH_PERIOD, prefix: str = OVERLAY_PREFIX):
         super().__init__()
         self._meshcat = meshcat
@@ -232,7 +232,7 @@ class TrackingOverlay(LeafSystem):
         self._model = make_plant("rigid")
         plant = self._model.plant
         self._context = plant.CreateDefaultContext()
-        self._state_indices = plant_model.rigid_state_indices
+        self._state_indices = simulated_plant.rigid_state_indices
         self._mass = plant.CalcTotalMass(self._context)
         self._gravity = -plant.gravity_field().gravity_vector()[2]
         self._K_x = np.asarray(scenario.gains.K_x, dtype=float)
@@ -243,7 +243,7 @@ class TrackingOverlay(LeafSystem):
         self._ee_path, self._com_path = ref.p_ed.T.copy(), ref.com[:, 0].T.copy()
         self._shown = {}  # arrow path -> visible, to send a visibility only when it changes
 
-        nx = plant_model.plant.num_positions() + plant_model.plant.num_velocities()
+        nx = simulated_plant.plant.num_positions() + simulated_plant.plant.num_velocities()
         self._state_port = self.DeclareVectorInputPort("plant_state", nx)
         self._com_port = self.DeclareVectorInputPort("com_reference", COM_REFERENCE_SIZE)
         self._task_port = self.DeclareVectorInputPort("task_reference", TASK_REFERENCE_SIZE)
@@ -382,7 +382,7 @@ class MeshcatView:
         self.visualizer = MeshcatVisualizer.AddToBuilder(
             builder, diagram.GetOutputPort("query_object"), self.meshcat, params)
         overlay = builder.AddSystem(TrackingOverlay(
-            self.meshcat, self.scenario, loop.plant_model, publish_period=self.publish_period))
+            self.meshcat, self.scenario, loop.simulated_plant, publish_period=self.publish_period))
         overlay.set_name("meshcat_overlay")
         for port in ("plant_state", "com_reference", "task_reference", "heading_reference"):
             builder.Connect(diagram.GetOutputPort(port), overlay.GetInputPort(port))

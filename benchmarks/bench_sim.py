@@ -42,7 +42,7 @@ def _controller_time(scenario, result, samples: int = 1000) -> float:
     from aerial_drake.diagram import build_closed_loop
 
     loop = build_closed_loop(scenario)
-    ctrl, sim = loop.controller, loop.plant_model
+    ctrl, sim = loop.controller, loop.simulated_plant
     idx = sim.rigid_state_indices
     log = result.log
     rows = np.linspace(0, len(log["t"]) - 1, samples).astype(int)
