@@ -123,10 +123,11 @@ DIAGNOSTICS_LAYOUT: tuple[tuple[str, int], ...] = (
 )
 
 
-def diagnostics_slices() -> dict[str, slice]:
-    """Name -> slice into the diagnostics vector."""
+def diagnostics_slices(layout=DIAGNOSTICS_LAYOUT) -> dict[str, slice]:
+    """Name -> slice into the diagnostics vector, for ``layout`` ((name, size) pairs; by
+    default this version's, or e.g. the one stored in a log)."""
     out, start = {}, 0
-    for name, size in DIAGNOSTICS_LAYOUT:
+    for name, size in layout:
         out[name] = slice(start, start + size)
         start += size
     return out

@@ -91,13 +91,10 @@ class Run:
 
 
 def _diagnostics_slices(log: dict) -> dict[str, slice]:
+    """The diagnostics layout a log was written with (this version's if it has none)."""
     if "layout" not in log:
         return diagnostics_slices()
-    out, start = {}, 0
-    for name, size in json.loads(str(log["layout"]))["diagnostics"]:
-        out[name] = slice(start, start + size)
-        start += size
-    return out
+    return diagnostics_slices(json.loads(str(log["layout"]))["diagnostics"])
 
 
 def load_run(folder: str | Path) -> Run:

@@ -35,6 +35,12 @@ def at_state(plant, dd, q, v):
     return ctx, dd.compute(ctx)
 
 
+def decompositions(plant, dd, seed):
+    """The decomposition at each of ``random_states(plant, seed)``."""
+    for q, v in random_states(plant, seed=seed):
+        yield at_state(plant, dd, q, v)[1]
+
+
 def central_difference(plant, dd, q, v, attr, h=1e-6):
     """d/dt of a Decomposition field along q_dot = N(q) v (v held)."""
     ctx = plant.CreateDefaultContext()
@@ -100,8 +106,7 @@ def test_com_jacobian_matches_drake(dut):
 
 def test_lambda_block_diagonal_and_com_block(dut):
     plant, dd = dut
-    for q, v in random_states(plant, seed=5):
-        _, d = at_state(plant, dd, q, v)
+    for d in decompositions(plant, dd, seed=5):
         L = d.Lambda
         norm = np.linalg.norm(L)
         for i, j in ((1, 2), (1, 3), (2, 3)):
@@ -130,8 +135,7 @@ def test_gamma_structure_and_passivity(dut):
 
 def test_input_map_and_transformed_gravity(dut):
     plant, dd = dut
-    for q, v in random_states(plant, seed=7):
-        _, d = at_state(plant, dd, q, v)
+    for d in decompositions(plant, dd, seed=7):
         top = d.input_map[:3]
         expected = np.hstack([d.R, np.zeros((3, 3 + d.n))])
         np.testing.assert_allclose(top, expected, atol=1e-10)
@@ -143,8 +147,8 @@ def test_input_map_and_transformed_gravity(dut):
 
 def test_null_space_and_xi(dut):
     plant, dd = dut
-    for q, v in random_states(plant, seed=8):
-        _, d = at_state(plant, dd, q, v)
+    for d in decompositions(plant, dd, seed=8):
+        v = d.v  # the state's velocity
         np.testing.assert_allclose(d.Z @ np.vstack([d.J_g, d.J_bw]).T, 0, atol=1e-12)
         Minv = np.linalg.inv(d.M)
         np.testing.assert_allclose(d.N @ Minv @ np.vstack([d.J_g, d.J_bw]).T, 0, atol=1e-9)
