@@ -90,6 +90,16 @@ class AssumptionViolation(RuntimeError):
     """Raised when Assumption 1 (J_3 nonsingular) or 2 (|f_d| > 0) of the paper fails."""
 
 
+def assumption_1_message(sigma_min: float, limit: float) -> str:
+    return (f"Assumption 1 violated: J_3 is singular, sigma_min(J_3) = {sigma_min:.3g} "
+            f"(limit {limit:g})")
+
+
+def assumption_2_message(f_d_norm: float, limit: float) -> str:
+    return (f"Assumption 2 violated: the desired thrust vanishes, |f_d| = {f_d_norm:.3g} N "
+            f"(limit {limit:g} N)")
+
+
 @dataclass(frozen=True)
 class TaskKinematics:
     """The task ``y`` at one state: end-effector pose, ``q3``, and ``y_dot = J_y v``."""
@@ -224,9 +234,7 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
     f_d = desired_force(m, gravity, ref.com, x_t, x_t_dot, K.K_x, K.D_x)  # (10)
     f_d_norm = float(np.linalg.norm(value_of(f_d)))
     if not f_d_norm > f_d_limit:
-        raise AssumptionViolation(
-            f"Assumption 2 violated: the desired thrust vanishes, |f_d| = {f_d_norm:.3g} N "
-            f"(limit {f_d_limit:g} N)")
+        raise AssumptionViolation(assumption_2_message(f_d_norm, f_d_limit))
     u1 = f_d @ Re3  # (11)
     # CoM acceleration and jerk from the model (9a), for the attitude feed-forward.
     xg_dd = u1 * Re3 / m - ge3
@@ -262,9 +270,7 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
     # accurate to ~1e-16 sigma_max^2 / sigma_min, far below the check's threshold).
     sigma_min = float(np.sqrt(max(np.linalg.eigvalsh(J3_value.T @ J3_value)[0], 0.0)))
     if not sigma_min > sigma_min_J3_limit:
-        raise AssumptionViolation(
-            f"Assumption 1 violated: J_3 is singular, sigma_min(J_3) = {sigma_min:.3g} "
-            f"(limit {sigma_min_J3_limit:g})")
+        raise AssumptionViolation(assumption_1_message(sigma_min, sigma_min_J3_limit))
     R_err = task.R_WE @ ref.R_ed.T
     y_t = np.concatenate([task.p_WE - ref.p_ed, vee(R_err), [task.q3 - ref.q3d]])
     y_t_dot = J @ xi - ref.y_d_dot  # (17)

@@ -19,13 +19,20 @@ from pydrake.systems.scalar_conversion import TemplateSystem
 
 from aerial_drake.control import (
     DIAGNOSTICS_SIZE, F_D_LIMIT, SIGMA_MIN_J3_LIMIT, AssumptionViolation, ControlOutput,
-    GainMatrices, Gains, Reference, TaskKinematics, compute_control)
+    GainMatrices, Gains, Reference, TaskKinematics, assumption_1_message, assumption_2_message,
+    compute_control)
+from aerial_drake.compiled import (
+    ASSUMPTION_1, ASSUMPTION_2, NONFINITE, CompiledLaw, pack_gains)
 from aerial_drake.decoupling import DecoupledDynamics, value_of
+from aerial_drake.kinematic_tree import KinematicTree, UnsupportedTree
 from aerial_drake.models import AerialManipulator
 from aerial_drake.reference import (
     COM_REFERENCE_SIZE, HEADING_REFERENCE_SIZE, TASK_REFERENCE_SIZE, unpack_com_reference,
     unpack_heading_reference, unpack_task_reference)
 
+
+NONFINITE_STATE = ("the plant state is not finite (the simulation diverged before the "
+                   "controller could act)")
 
 
 class _ControllerPorts:
@@ -85,6 +92,7 @@ class _DecoupledControllerBase(_ControllerPorts):
         self._limits = dict(sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit)
         self._plant_context = plant.CreateDefaultContext()
         self.evaluations = 0  # number of control law evaluations (for tests and benchmarks)
+        self._compiled = self._make_compiled(gains) if self._dtype is float else None
 
         nx = plant.num_positions() + nv
         self._state_port = self.DeclareVectorInputPort("state", nx)
@@ -105,9 +113,52 @@ class _DecoupledControllerBase(_ControllerPorts):
             prerequisites_of_calc={self._solution.ticket()})
 
 
+    def _make_compiled(self, gains: Gains) -> CompiledLaw | None:
+        """The compiled law (:mod:`aerial_drake.compiled`) on this plant, or None where its
+        kernels do not handle the plant's structure (then :meth:`solve` serves)."""
+        try:
+            tree = KinematicTree.from_plant(self._plant, self._dynamics.base_body)
+        except UnsupportedTree:
+            return None
+        X_BE = self._frame.GetFixedPoseInBodyFrame()
+        ee = (tree.index_of(self._frame.body()), X_BE.rotation().matrix(), X_BE.translation())
+        return CompiledLaw(tree, self._plant.num_positions(), ee, self._q3_q, self._q3_v,
+                           pack_gains(self._K, self._gravity), **self._limits)
+
+    @property
+    def compiled(self) -> bool:
+        """Whether the simulation evaluates the compiled law (double plants of a supported
+        structure) rather than :meth:`solve`."""
+        return self._compiled is not None
+
+    def evaluate(self, x: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """``(command, diagnostics)`` of the law at state ``x``: what the output ports give,
+        by the compiled law when :attr:`compiled`, else by :meth:`solve`.
+
+        Raises:
+            AssumptionViolation: as :func:`aerial_drake.control.compute_control`.
+        """
+        if self._compiled is None:
+            out = self.solve(x, com, task, heading)
+            return np.concatenate([[out.f], out.mu, out.tau]), out.diagnostics
+        command, diagnostics = np.empty(4 + self._n), np.empty(DIAGNOSTICS_SIZE)
+        status, f_d_norm, sigma_min = self._compiled(x, com, task, heading, command, diagnostics)
+        self.evaluations += 1
+        if status == NONFINITE:
+            raise FloatingPointError(NONFINITE_STATE)
+        if status == ASSUMPTION_2:
+            raise AssumptionViolation(assumption_2_message(f_d_norm, self._limits["f_d_limit"]))
+        if status == ASSUMPTION_1:
+            raise AssumptionViolation(
+                assumption_1_message(sigma_min, self._limits["sigma_min_J3_limit"]))
+        return command, diagnostics
+
     def solve(self, x: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
               ) -> ControlOutput:
-        """The law at state ``x`` and packed references (no Drake context needed)."""
+        """The law at state ``x`` and packed references (no Drake context needed), by the
+        reference implementation (:mod:`aerial_drake.decoupling`, :mod:`aerial_drake.control`),
+        with every intermediate quantity."""
         plant, ctx = self._plant, self._plant_context
         plant.SetPositionsAndVelocities(ctx, x)
         d = self._dynamics.compute(ctx)
@@ -132,32 +183,26 @@ class _DecoupledControllerBase(_ControllerPorts):
 
     def _calc_solution(self, context: Context, value: AbstractValue) -> None:
         x = self._state_port.Eval(context)
-        if not np.all(np.isfinite(value_of(x))):
-            raise FloatingPointError(
-                f"t = {context.get_time():.4f} s: the plant state is not finite (the simulation "
-                "diverged before the controller could act)")
         com, task = self._com_port.Eval(context), self._task_port.Eval(context)
         heading = self._heading_port.Eval(context)
-        if self._dtype == object:
-            com, task, heading = (_reference_values(r) for r in (com, task, heading))
         try:
+            if self._compiled is not None:
+                value.set_value(self.evaluate(x, com, task, heading))
+                return
+            if not np.all(np.isfinite(value_of(x))):
+                raise FloatingPointError(NONFINITE_STATE)
+            if self._dtype == object:
+                com, task, heading = (_reference_values(r) for r in (com, task, heading))
             out = self.solve(x, com, task, heading)
-        except AssumptionViolation as err:
-            raise AssumptionViolation(f"t = {context.get_time():.4f} s: {err}") from None
-        value.set_value(out)
+        except (AssumptionViolation, FloatingPointError) as err:
+            raise type(err)(f"t = {context.get_time():.4f} s: {err}") from None
+        value.set_value((np.concatenate([[out.f], out.mu, out.tau]), out.diagnostics))
 
     def _calc_command(self, context: Context, output: BasicVector) -> None:
-        out: ControlOutput = self._solution.Eval(context)
-        if self._dtype == object:
-            output.SetFromVector(np.concatenate([[out.f], out.mu, out.tau]))
-            return
-        cmd = output.get_mutable_value()
-        cmd[0] = out.f
-        cmd[1:4] = out.mu
-        cmd[4:] = out.tau
+        output.SetFromVector(self._solution.Eval(context)[0])
 
     def _calc_diagnostics(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(self._solution.Eval(context).diagnostics)
+        output.SetFromVector(self._solution.Eval(context)[1])
 
 
 def _reference_values(reference: np.ndarray) -> np.ndarray:
