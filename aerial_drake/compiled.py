@@ -10,19 +10,24 @@ of numpy calls on 3- to 13-element arrays. See ``docs/performance.md``.
 
 The only entry points are :class:`CompiledLaw` and :func:`decompose`; the kernels are private.
 numba compiles them on first use and caches the machine code next to this file (``cache=True``),
-so only the first run after installing pays the compile time (about 20 s).
+so only the first run after installing pays the compile time (about a minute on a 2-core
+machine; a note on stderr says so); later processes load the machine code in under a second.
 """
 
 from __future__ import annotations
 
 import math
+import os
+import sys
 
 import numpy as np
 from numba import njit
 
 from aerial_drake.kinematic_tree import FREE, REVOLUTE, KinematicTree
 
-_jit = njit(cache=True, nogil=True)
+# error_model="numpy": a division by zero gives inf/nan as in the numpy path (and the checks
+# of Assumptions 1 and 2 report it) instead of raising ZeroDivisionError mid-law.
+_jit = njit(cache=True, nogil=True, error_model="numpy")
 
 #: Status codes of the law kernel.
 OK, ASSUMPTION_2, ASSUMPTION_1, NONFINITE = 0, 1, 2, 3
@@ -750,6 +755,29 @@ class CompiledLaw:
             int(q3_velocity_index), np.ascontiguousarray(gains, dtype=float),
             np.array([sigma_min_J3_limit, f_d_limit], dtype=float))
         self._nq = int(num_positions)
+        self._compile(tree)
+
+    def _compile(self, tree: KinematicTree) -> None:
+        """Compile (or load from numba's cache) now, at construction, rather than in the
+        middle of the first simulation step: one evaluation at rest, outputs discarded."""
+        if _law.signatures:
+            return
+        try:
+            cold = not os.path.exists(_law._cache._cache_file._index_path)
+        except AttributeError:  # numba internals moved; the note is only a courtesy
+            cold = False
+        if cold:
+            print("aerial_drake: compiling the control law with numba (first use after "
+                  "installing; about a minute, cached afterwards) ...", file=sys.stderr,
+                  flush=True)
+        nv = tree.reflected_inertia.size
+        x = np.zeros(self._nq + nv)
+        x[0] = 1.0  # unit quaternion, all else zero
+        task, heading = np.zeros(27), np.zeros(9)
+        task[3:12] = np.eye(3).ravel()
+        heading[0] = 1.0
+        n = nv - 6
+        self(x, np.zeros(15), task, heading, np.empty(4 + n), np.empty(23 + 2 * n))
 
     def __call__(self, x: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
                  command: np.ndarray, diagnostics: np.ndarray) -> tuple[int, float, float]:
