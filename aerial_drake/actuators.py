@@ -59,19 +59,37 @@ def free_body_wrench_map(nv: int) -> np.ndarray:
 
 class PointWrenchApplier(LeafSystem):
     """A World wrench ``[torque; force]`` (input ``wrench``, 6) applied at a point fixed on a
-    body, as a Drake ``ExternallyAppliedSpatialForce`` list (output ``spatial_forces``)."""
+    body, as a Drake ``ExternallyAppliedSpatialForce`` list (output ``spatial_forces``).
+
+    The output depends on the input alone. Its input usually depends on time (a disturbance
+    schedule), so the plant asks for it at every integrator stage: the calculation keeps the
+    last force list and rebuilds it only when the wrench changes (a piecewise-constant
+    disturbance changes at its window edges only).
+    """
 
     def __init__(self, body: RigidBody, p_BoQ_B: np.ndarray):
         super().__init__()
-        self._force = ExternallyAppliedSpatialForce()
-        self._force.body_index = body.index()
-        self._force.p_BoBq_B = np.asarray(p_BoQ_B, dtype=float).copy()
-        self.DeclareVectorInputPort("wrench", 6)
+        self._body_index = body.index()
+        self._p_BoQ_B = np.asarray(p_BoQ_B, dtype=float).copy()
+        self._wrench_port = self.DeclareVectorInputPort("wrench", 6)
+        # The last wrench (as bytes) and its force list: a pure function of the input, so it
+        # is shared by every context.
+        self._last_wrench, self._last_forces = None, None
         self.DeclareAbstractOutputPort(
-            "spatial_forces", lambda: AbstractValue.Make([ExternallyAppliedSpatialForce()]),
-            self._calc)
+            "spatial_forces", lambda: AbstractValue.Make([self._force(np.zeros(6))]),
+            self._calc,
+            prerequisites_of_calc={self.input_port_ticket(self._wrench_port.get_index())})
+
+    def _force(self, wrench: np.ndarray) -> ExternallyAppliedSpatialForce:
+        force = ExternallyAppliedSpatialForce()
+        force.body_index = self._body_index
+        force.p_BoBq_B = self._p_BoQ_B
+        force.F_Bq_W = SpatialForce(wrench[:3], wrench[3:])
+        return force
 
     def _calc(self, context: Context, output: AbstractValue) -> None:
-        w = self.get_input_port(0).Eval(context)
-        self._force.F_Bq_W = SpatialForce(w[:3], w[3:])
-        output.set_value([self._force])
+        wrench = self._wrench_port.Eval(context)
+        key = wrench.tobytes()
+        if key != self._last_wrench:
+            self._last_wrench, self._last_forces = key, [self._force(wrench)]
+        output.set_value(self._last_forces)
