@@ -13,7 +13,9 @@ import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
-from pydrake.systems.framework import Context, Diagram, EventStatus
+from pydrake.multibody.plant import MultibodyPlant
+from pydrake.systems.framework import Context
+from pydrake.systems.primitives import VectorLogSink
 
 from aerial_drake.control import (
     DIAGNOSTICS_LAYOUT, AssumptionViolation, desired_attitude, desired_force)
@@ -131,35 +133,103 @@ def _is_terminal(stream) -> bool:
 
 
 class _Progress:
-    """Prints simulated time, wall time and real-time factor every ``every`` simulated seconds,
-    and stops the simulation on a non-finite state."""
+    """Prints simulated time, wall time and real-time factor, one report per call."""
 
-    def __init__(self, diagram: Diagram, loop: ClosedLoop, duration: float, every: float,
-                 stream) -> None:
-        self.diagram, self.loop, self.duration = diagram, loop, duration
-        self.every, self.stream = every, stream
+    def __init__(self, duration: float, stream) -> None:
+        self.duration, self.stream = duration, stream
         # On a terminal the line rewrites itself; in a log file each report is its own line.
         self._end = "" if stream is not None and _is_terminal(stream) else "\n"
         self._start = "\r" if not self._end else ""
-        self.next_print = every
         self.start = time.perf_counter()
-        self.failure: str | None = None
 
-    def __call__(self, root_context: Context) -> EventStatus:
-        t = root_context.get_time()
-        if self.stream is not None and t >= self.next_print - 1e-9:
-            wall = time.perf_counter() - self.start
-            self.stream.write(f"{self._start}  t = {t:6.2f} / {self.duration:g} s   wall "
-                              f"{wall:6.1f} s   real-time factor {t / max(wall, 1e-9):5.1f}x"
-                              f"{self._end}")
-            self.stream.flush()
-            self.next_print += self.every
-        x = self.loop.simulated_plant.plant.GetPositionsAndVelocities(
-            self.loop.simulated_plant.plant.GetMyContextFromRoot(root_context))
-        if not np.all(np.isfinite(x)):
-            self.failure = f"t = {t:.4f} s: the plant state became non-finite (diverged)"
-            return EventStatus.Failed(self.diagram, self.failure)
-        return EventStatus.Succeeded()
+    def report(self, t: float) -> None:
+        if self.stream is None:
+            return
+        wall = time.perf_counter() - self.start
+        self.stream.write(f"{self._start}  t = {t:6.2f} / {self.duration:g} s   wall "
+                          f"{wall:6.1f} s   real-time factor {t / max(wall, 1e-9):5.1f}x"
+                          f"{self._end}")
+        self.stream.flush()
+
+
+def pause_times(duration: float, period: float, every: float = 1.0) -> list[float]:
+    """Where :func:`_advance` pauses the simulation: multiples of ``period`` (the loggers'
+    period) about ``every`` seconds apart, then ``duration``.
+
+    Drake times the loggers' samples at ``k * period`` (k an integer), so the simulator ends a
+    step there anyway: stopping AdvanceTo at the same doubles adds no step and leaves every
+    number of the run unchanged.
+    """
+    stride = max(1, round(every / period))
+    times = []
+    k = stride
+    while k * period < duration:
+        times.append(k * period)
+        k += stride
+    return times + [duration]
+
+
+def _advance(simulator: Simulator, plant: MultibodyPlant, pauses: list[float],
+             progress: _Progress) -> None:
+    """Advance to each of ``pauses`` in turn, reporting progress; stop early at a pause where
+    the plant's state is not finite (:func:`run_scenario` then finds when from the log).
+
+    Checking between AdvanceTo calls replaces a per-step Simulator monitor, which cost a Python
+    call at every 1 ms step. The controller checks the state at each of its evaluations, so a
+    closed loop stops at the first non-finite sample anyway.
+    """
+    context = simulator.get_context()
+    plant_context = plant.GetMyContextFromRoot(context)
+    for t in pauses:
+        simulator.AdvanceTo(t)
+        progress.report(context.get_time())
+        if not np.all(np.isfinite(plant.GetPositionsAndVelocities(plant_context))):
+            return
+
+
+def _simulate(simulator: Simulator, loop: ClosedLoop, pauses: list[float],
+              progress: _Progress) -> tuple[str | None, bool, float]:
+    """Run the simulation; returns the failure message (None if it reached the end), whether
+    Ctrl-C stopped it, and the wall time (s)."""
+    failure, interrupted = None, False
+    start = time.perf_counter()
+    try:
+        _prime_held_inputs(loop, simulator.get_mutable_context())
+        simulator.Initialize()
+        _advance(simulator, loop.simulated_plant.plant, pauses, progress)
+    except (AssumptionViolation, FloatingPointError, RuntimeError) as err:
+        failure = str(err)
+    except KeyboardInterrupt:
+        time_now = simulator.get_context().get_time()
+        failure, interrupted = f"interrupted (Ctrl-C) at t = {time_now:.3f} s", True
+    return failure, interrupted, time.perf_counter() - start
+
+
+def _collect_log(loggers: dict[str, VectorLogSink], context: Context) -> dict[str, np.ndarray]:
+    """The loggers' samples as ``{"t": times, port: (samples, size)}``, cut to a common
+    length."""
+    log = {port: logger.FindLog(context) for port, logger in loggers.items()}
+    arrays = {"t": log["plant_state"].sample_times()}
+    for port, entry in log.items():
+        arrays[port] = entry.data().T
+    n = min(len(v) for v in arrays.values())
+    return {k: v[:n] for k, v in arrays.items()}
+
+
+def _first_non_finite_sample(arrays: dict[str, np.ndarray]) -> int | None:
+    """Index of the first logged plant state that is not finite, if any."""
+    bad = ~np.all(np.isfinite(arrays["plant_state"]), axis=1)
+    return int(np.argmax(bad)) if bad.any() else None
+
+
+def _cut_at_divergence(arrays: dict[str, np.ndarray], index: int,
+                       ) -> tuple[dict[str, np.ndarray], float, str]:
+    """The log up to its first non-finite plant state (at ``index``), that sample's time and
+    the failure message. The first non-finite sample is where the run went wrong, whatever
+    stopped it later, so the log ends there, as the message says."""
+    arrays = {k: v[:index + 1] for k, v in arrays.items()}
+    t = float(arrays["t"][index])
+    return arrays, t, f"t = {t:.4f} s: the plant state became non-finite (diverged)"
 
 
 def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
@@ -191,33 +261,17 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     context = simulator.get_mutable_context()
     plant_context = loop.simulated_plant.plant.GetMyMutableContextFromRoot(context)
     set_initial_state(scenario, loop, plant_context)
-    monitor = _Progress(diagram, loop, scenario.duration, every=1.0,
-                        stream=stream if progress else None)
-    simulator.set_monitor(monitor)
-
-    failure, interrupted = None, False
-    start = time.perf_counter()
-    try:
-        _prime_held_inputs(loop, context)
-        simulator.Initialize()
-        simulator.AdvanceTo(scenario.duration)
-    except (AssumptionViolation, FloatingPointError) as err:
-        failure = str(err)
-    except RuntimeError as err:
-        failure = monitor.failure or str(err)
-    except KeyboardInterrupt:
-        failure = f"interrupted (Ctrl-C) at t = {context.get_time():.3f} s"
-        interrupted = True
-    wall = time.perf_counter() - start
+    progress_lines = _Progress(scenario.duration, stream if progress else None)
+    failure, interrupted, wall = _simulate(
+        simulator, loop, pause_times(scenario.duration, scenario.log_period), progress_lines)
     if progress and _is_terminal(stream):
         stream.write("\n")  # end the self-rewriting progress line
-    log = {port: logger.FindLog(context) for port, logger in loggers.items()}
-    arrays = {"t": log["plant_state"].sample_times()}
-    for port, entry in log.items():
-        arrays[port] = entry.data().T
-    n = min(len(v) for v in arrays.values())
-    arrays = {k: v[:n] for k, v in arrays.items()}
+    arrays = _collect_log(loggers, context)
     sim_time = float(context.get_time())
+    diverged = _first_non_finite_sample(arrays)
+    if diverged is not None:
+        arrays, sim_time, failure = _cut_at_divergence(arrays, diverged)
+        interrupted = False
     metrics = _metrics(scenario, loop, arrays, wall, sim_time)
     result = RunResult(scenario=scenario, log=arrays, metrics=metrics, wall_time_s=wall,
                        completed=failure is None, failure=failure)
