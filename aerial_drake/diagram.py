@@ -221,8 +221,11 @@ def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: 
     builder.ExportOutput(pid.get_output_port_control(), "rotor_drive_torque")
 
 
-LOGGED_PORTS = ("plant_state", "command", "applied_command", "diagnostics", "com_reference",
-                "task_reference", "heading_reference", "rotor_drive_torque")
+#: The closed loop's outputs logged at every sample. The references are not among them: they
+#: are functions of time alone, recomputed after the run from the sample times by the same
+#: compiled code (:func:`aerial_drake.reference.sample_reference`, equal to the last bit), so
+#: nothing evaluates them in the loop but the controller.
+LOGGED_PORTS = ("plant_state", "command", "applied_command", "diagnostics", "rotor_drive_torque")
 
 
 def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = None,

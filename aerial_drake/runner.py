@@ -205,15 +205,19 @@ def _simulate(simulator: Simulator, loop: ClosedLoop, pauses: list[float],
     return failure, interrupted, time.perf_counter() - start
 
 
-def _collect_log(loggers: dict[str, VectorLogSink], context: Context) -> dict[str, np.ndarray]:
+def _collect_log(scenario: Scenario, loggers: dict[str, VectorLogSink],
+                 context: Context) -> dict[str, np.ndarray]:
     """The loggers' samples as ``{"t": times, port: (samples, size)}``, cut to a common
-    length."""
+    length, with the references at the sample times (what the reference ports gave there)."""
     log = {port: logger.FindLog(context) for port, logger in loggers.items()}
     arrays = {"t": log["plant_state"].sample_times()}
     for port, entry in log.items():
         arrays[port] = entry.data().T
     n = min(len(v) for v in arrays.values())
-    return {k: v[:n] for k, v in arrays.items()}
+    arrays = {k: v[:n] for k, v in arrays.items()}
+    references = sample_reference(scenario.trajectory, arrays["t"]).to_vectors()
+    arrays.update(zip(("com_reference", "task_reference", "heading_reference"), references))
+    return arrays
 
 
 def _first_non_finite_sample(arrays: dict[str, np.ndarray]) -> int | None:
@@ -266,7 +270,7 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
         simulator, loop, pause_times(scenario.duration, scenario.log_period), progress_lines)
     if progress and _is_terminal(stream):
         stream.write("\n")  # end the self-rewriting progress line
-    arrays = _collect_log(loggers, context)
+    arrays = _collect_log(scenario, loggers, context)
     sim_time = float(context.get_time())
     diverged = _first_non_finite_sample(arrays)
     if diverged is not None:

@@ -1,5 +1,5 @@
 """Tests of aerial_drake.runner's simulation loop: where it pauses, that pausing changes no
-number, progress lines and a diverging plant."""
+number, progress lines, a diverging plant, and the references it logs."""
 
 import io
 import json
@@ -10,6 +10,7 @@ from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 
 from aerial_drake import runner as dut
 from aerial_drake.diagram import build_simulation
+from aerial_drake.reference import ReferenceGenerator
 from aerial_drake.scenarios import load_scenario
 
 DURATION = 2.5
@@ -63,6 +64,19 @@ def test_progress_line_about_every_simulated_second(zero_run):
     lines = text.splitlines()
     assert [line.split()[2] for line in lines] == ["1.00", "2.00", "2.50"]
     assert all("real-time factor" in line for line in lines)
+
+
+def test_logged_references_are_the_generators_outputs(zero_run):
+    """The references are computed after the run from the logged times; they must be what the
+    generator's ports (which the controller reads) give at those times, to the last bit."""
+    result, _ = zero_run
+    generator = ReferenceGenerator(short_nominal().trajectory)
+    context = generator.CreateDefaultContext()
+    for k in range(0, len(result.log["t"]), 97):
+        context.SetTime(result.log["t"][k])
+        for port in ("com_reference", "task_reference", "heading_reference"):
+            np.testing.assert_array_equal(generator.GetOutputPort(port).Eval(context),
+                                          result.log[port][k], err_msg=port)
 
 
 def test_diverging_plant_stops_with_the_time_of_the_first_non_finite_sample(
