@@ -22,7 +22,7 @@ import numpy as np
 from pydrake.systems.framework import Diagram, DiagramBuilder
 from pydrake.systems.primitives import (
     ConstantVectorSource, Demultiplexer, FirstOrderLowPassFilter, LogVectorOutput, MatrixGain,
-    Multiplexer, PassThrough, Saturation, VectorLogSink, ZeroOrderHold)
+    Multiplexer, Saturation, VectorLogSink, ZeroOrderHold)
 from pydrake.multibody.plant import ExternallyAppliedSpatialForceMultiplexer
 from pydrake.systems.controllers import PidController
 
@@ -88,6 +88,43 @@ def connect_actuation(builder: DiagramBuilder, sim: AerialManipulator, base_comm
     return base_actuator.get_spatial_forces_output_port()
 
 
+def _add_command_path(builder: DiagramBuilder, scenario: Scenario, model: AerialManipulator,
+                      command) -> tuple:
+    """From the held command ``[f, mu, tau]`` to what reaches the plant: the actuator lag on
+    ``[f, mu]`` (Section IV), then the saturation at ``input_limits``.
+
+    Returns the base (4) and joint (n) command ports that drive the actuation, the applied
+    command port (``[f, mu, tau]`` after lag and saturation) and the lag (None without).
+    Each system here is evaluated at every integrator stage (its output depends on time) at
+    about a microsecond apiece, so there are few: one saturation on the whole vector, and the
+    lag's output joined back to the joint torques only when there is a lag.
+    """
+    n = len(model.arm_joints)
+    lag = None
+    if scenario.actuation.lag_rise_time > 0:
+        split = builder.AddSystem(Demultiplexer([4, n]))
+        split.set_name("split_for_lag")
+        builder.Connect(command, split.get_input_port())
+        lag = builder.AddSystem(FirstOrderLowPassFilter(
+            lag_time_constant(scenario.actuation.lag_rise_time), 4))
+        lag.set_name("actuator_lag")
+        builder.Connect(split.get_output_port(0), lag.get_input_port())
+        lagged = builder.AddSystem(Multiplexer([4, n]))
+        lagged.set_name("lagged_command")
+        builder.Connect(lag.get_output_port(), lagged.get_input_port(0))
+        builder.Connect(split.get_output_port(1), lagged.get_input_port(1))
+        command = lagged.get_output_port()
+    if scenario.actuation.saturate:
+        saturation = builder.AddSystem(Saturation(*input_limits(scenario, model)))
+        saturation.set_name("saturation")
+        builder.Connect(command, saturation.get_input_port())
+        command = saturation.get_output_port()
+    split = builder.AddSystem(Demultiplexer([4, n]))
+    split.set_name("split_command")
+    builder.Connect(command, split.get_input_port())
+    return split.get_output_port(0), split.get_output_port(1), command, lag
+
+
 def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
                       zero_controller: bool = False) -> ClosedLoop:
     """The closed loop of ``scenario`` as one Diagram with exported disturbance inputs.
@@ -135,46 +172,15 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
     builder.ExportOutput(command, "command")
     builder.ExportOutput(controller.get_diagnostics_output_port(), "diagnostics")
 
-    split = builder.AddSystem(Demultiplexer([4, n]))
-    split.set_name("split_command")
-    builder.Connect(command, split.get_input_port())
-    base_cmd = split.get_output_port(0)
-    joint_cmd = split.get_output_port(1)
-
-    # Actuator lag on thrust and body torques only (Section IV).
-    lag = None
-    if scenario.actuation.lag_rise_time > 0:
-        lag = builder.AddSystem(FirstOrderLowPassFilter(
-            lag_time_constant(scenario.actuation.lag_rise_time), 4))
-        lag.set_name("actuator_lag")
-        builder.Connect(base_cmd, lag.get_input_port())
-        base_cmd = lag.get_output_port()
-
-    if scenario.actuation.saturate:
-        lower, upper = input_limits(scenario, model)
-        base_sat = builder.AddSystem(Saturation(lower[:4], upper[:4]))
-        base_sat.set_name("base_saturation")
-        joint_sat = builder.AddSystem(Saturation(lower[4:], upper[4:]))
-        joint_sat.set_name("joint_saturation")
-        builder.Connect(base_cmd, base_sat.get_input_port())
-        builder.Connect(joint_cmd, joint_sat.get_input_port())
-        base_cmd, joint_cmd = base_sat.get_output_port(), joint_sat.get_output_port()
-
-    applied = builder.AddSystem(Multiplexer([4, n]))
-    applied.set_name("applied_command")
-    builder.Connect(base_cmd, applied.get_input_port(0))
-    builder.Connect(joint_cmd, applied.get_input_port(1))
-    builder.ExportOutput(applied.get_output_port(), "applied_command")
+    base_cmd, joint_cmd, applied, lag = _add_command_path(builder, scenario, model, command)
+    builder.ExportOutput(applied, "applied_command")
 
     # (2): thrust along body z and body torques, at the helicopter frame; joint torques.
     base_forces = connect_actuation(builder, sim, base_cmd, joint_cmd)
     # Disturbances: at the helicopter frame as a generalized force, at the end effector as a
     # spatial force at the end-effector point.
-    heli_wrench = builder.AddSystem(PassThrough(6))
-    heli_wrench.set_name("helicopter_wrench")
     to_generalized = builder.AddSystem(MatrixGain(free_body_wrench_map(plant.num_velocities())))
     to_generalized.set_name("helicopter_wrench_to_generalized_force")
-    builder.Connect(heli_wrench.get_output_port(), to_generalized.get_input_port())
     builder.Connect(to_generalized.get_output_port(),
                     plant.get_applied_generalized_force_input_port())
     ee_wrench = builder.AddSystem(PointWrenchApplier(
@@ -185,7 +191,7 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
     builder.Connect(base_forces, forces.get_input_port(0))
     builder.Connect(ee_wrench.get_output_port(), forces.get_input_port(1))
     builder.Connect(forces.get_output_port(), plant.get_applied_spatial_force_input_port())
-    builder.ExportInput(heli_wrench.get_input_port(), "helicopter_wrench")
+    builder.ExportInput(to_generalized.get_input_port(), "helicopter_wrench")
     builder.ExportInput(ee_wrench.get_input_port(), "end_effector_wrench")
 
     if sim.rotor_joints:
