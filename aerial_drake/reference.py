@@ -42,8 +42,8 @@ import typing
 
 import numba
 import numpy as np
-from pydrake.common.value import AbstractValue
-from pydrake.systems.framework import BasicVector, Context, LeafSystem, ValueProducer
+from pydrake.systems.framework import BasicVector, Context, Diagram, DiagramBuilder, LeafSystem
+from pydrake.systems.primitives import Demultiplexer
 
 __all__ = [
     "COM_REFERENCE_SIZE",
@@ -505,12 +505,30 @@ def _fill_reference_over_time(k: np.ndarray, times: np.ndarray, out: np.ndarray)
         _fill_reference(k, times[i], out[i])
 
 
-class ReferenceGenerator(LeafSystem):
+class _PackedReference(LeafSystem):
+    """The concatenation [com, task, heading] (51) at the context time: one output, so one
+    Python call per time; :class:`ReferenceGenerator` splits it in C++."""
+
+    def __init__(self, constants: np.ndarray):
+        super().__init__()
+        self._constants = constants
+        self.DeclareVectorOutputPort("references", _TOTAL_SIZE, self._calc,
+                                     prerequisites_of_calc={self.time_ticket()})
+
+    def _calc(self, context: Context, output: BasicVector) -> None:
+        _fill_reference(self._constants, context.get_time(), output.get_mutable_value())
+
+
+class ReferenceGenerator(Diagram):
     """The reference trajectory (28)-(33) as a Drake source: no state, no inputs.
 
     Output ports (functions of the context's time only; layouts in the module docstring):
     ``com_reference`` (15), ``task_reference`` (27), ``heading_reference`` (9).
-    The three are computed together once per time in one cache entry.
+
+    A small Diagram: the three are computed together, once per time, by one compiled call in
+    a LeafSystem with a single output, and Drake's Demultiplexer splits them. The controller
+    reads all three at every sample: one Python call instead of one per port (and a cache
+    entry) saves about three quarters of the generator's cost in the closed loop.
 
     Double only (no AutoDiffXd / Expression conversion): its outputs depend on time alone, so
     linearise a diagram about a hover point with a ConstantVectorSource in its place.
@@ -520,35 +538,18 @@ class ReferenceGenerator(LeafSystem):
         super().__init__()
         params.validate()
         self._params = copy.deepcopy(params)
-        self._constants = _Constants.from_params(params).as_array()
-        # (28)-(33) at the context time, all three vectors in one buffer, per context.
-        self._all_references = self.DeclareCacheEntry(
-            description="[com, task, heading] references at the context time",
-            value_producer=ValueProducer(
-                allocate=lambda: AbstractValue.Make(np.zeros(_TOTAL_SIZE)),
-                calc=self._calc_all_references,
-            ),
-            prerequisites_of_calc={self.time_ticket()},
-        )
-        depends_on_cache = {self._all_references.ticket()}
-        self._com_port = self.DeclareVectorOutputPort(
-            "com_reference",
-            COM_REFERENCE_SIZE,
-            self._calc_com_reference,
-            prerequisites_of_calc=depends_on_cache,
-        )
-        self._task_port = self.DeclareVectorOutputPort(
-            "task_reference",
-            TASK_REFERENCE_SIZE,
-            self._calc_task_reference,
-            prerequisites_of_calc=depends_on_cache,
-        )
-        self._heading_port = self.DeclareVectorOutputPort(
-            "heading_reference",
-            HEADING_REFERENCE_SIZE,
-            self._calc_heading_reference,
-            prerequisites_of_calc=depends_on_cache,
-        )
+        builder = DiagramBuilder()
+        packed = builder.AddSystem(_PackedReference(_Constants.from_params(params).as_array()))
+        packed.set_name("packed_reference")
+        split = builder.AddSystem(
+            Demultiplexer([COM_REFERENCE_SIZE, TASK_REFERENCE_SIZE, HEADING_REFERENCE_SIZE]))
+        split.set_name("split_reference")
+        builder.Connect(packed.get_output_port(), split.get_input_port())
+        names = ("com_reference", "task_reference", "heading_reference")
+        for i, name in enumerate(names):
+            builder.ExportOutput(split.get_output_port(i), name)
+        builder.BuildInto(self)
+        self._com_port, self._task_port, self._heading_port = map(self.GetOutputPort, names)
 
     def params(self) -> TrajectoryParams:
         """A copy of the parameters this system was built with."""
@@ -562,15 +563,3 @@ class ReferenceGenerator(LeafSystem):
 
     def get_heading_reference_output_port(self):
         return self._heading_port
-
-    def _calc_all_references(self, context: Context, value: AbstractValue) -> None:
-        _fill_reference(self._constants, context.get_time(), value.get_mutable_value())
-
-    def _calc_com_reference(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(self._all_references.Eval(context)[_COM])
-
-    def _calc_task_reference(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(self._all_references.Eval(context)[_TASK])
-
-    def _calc_heading_reference(self, context: Context, output: BasicVector) -> None:
-        output.SetFromVector(self._all_references.Eval(context)[_HEADING])
