@@ -81,6 +81,7 @@ class PointWrenchApplier(LeafSystem):
             prerequisites_of_calc={self.input_port_ticket(self._wrench_port.get_index())})
 
     def _force(self, wrench: np.ndarray) -> ExternallyAppliedSpatialForce:
+        """The World ``wrench`` [torque; force] at this applier's point of its body."""
         force = ExternallyAppliedSpatialForce()
         force.body_index = self._body_index
         force.p_BoBq_B = self._p_BoQ_B

@@ -19,7 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from pydrake.systems.framework import Diagram, DiagramBuilder
+from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 from pydrake.systems.primitives import (
     ConstantVectorSource, Demultiplexer, FirstOrderLowPassFilter, LogVectorOutput, MatrixGain,
     Multiplexer, Saturation, VectorLogSink, ZeroOrderHold)
@@ -88,16 +88,18 @@ def connect_actuation(builder: DiagramBuilder, sim: AerialManipulator, base_comm
     return base_actuator.get_spatial_forces_output_port()
 
 
-def _add_command_path(builder: DiagramBuilder, scenario: Scenario, model: AerialManipulator,
-                      command) -> tuple:
+def _add_command_path(
+        builder: DiagramBuilder, scenario: Scenario, model: AerialManipulator,
+        command: OutputPort) -> tuple[OutputPort, OutputPort, OutputPort,
+                                      FirstOrderLowPassFilter | None]:
     """From the held command ``[f, mu, tau]`` to what reaches the plant: the actuator lag on
     ``[f, mu]`` (Section IV), then the saturation at ``input_limits``.
 
     Returns the base (4) and joint (n) command ports that drive the actuation, the applied
     command port (``[f, mu, tau]`` after lag and saturation) and the lag (None without).
-    Each system here is evaluated at every integrator stage (its output depends on time) at
-    about a microsecond apiece, so there are few: one saturation on the whole vector, and the
-    lag's output joined back to the joint torques only when there is a lag.
+    Each system here is evaluated at every integrator stage and adds framework work to every
+    step, so there are few: one saturation on the whole vector, and the lag's output joined
+    back to the joint torques only when there is a lag.
     """
     n = len(model.arm_joints)
     lag = None

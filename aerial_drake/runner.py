@@ -143,6 +143,7 @@ class _Progress:
         self.start = time.perf_counter()
 
     def report(self, t: float) -> None:
+        """One progress report at simulated time ``t`` (s); nothing without a stream."""
         if self.stream is None:
             return
         wall = time.perf_counter() - self.start
