@@ -166,12 +166,6 @@ def _lu_solve(LU, piv, B):
 
 
 @_jit
-def _solve(A, B):
-    LU, piv = _lu(A)
-    return _lu_solve(LU, piv, B)
-
-
-@_jit
 def _inv(A):
     LU, piv = _lu(A)
     return _lu_solve(LU, piv, np.eye(A.shape[0]))
@@ -319,9 +313,9 @@ def _kinematics(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_
 
 
 @_jit
-def _crm_col_times(J, k, a, out, col):
-    """out[:, col] = crm(J[:, k]) a, crm([w; v]) = [[w x, 0], [v x, w x]]."""
-    wx, wy, wz, vx, vy, vz = J[0, k], J[1, k], J[2, k], J[3, k], J[4, k], J[5, k]
+def _crm_times_into(s, a, out, col):
+    """out[:, col] = crm(s) a for spatial vectors, crm([w; v]) = [[w x, 0], [v x, w x]]."""
+    wx, wy, wz, vx, vy, vz = s[0], s[1], s[2], s[3], s[4], s[5]
     out[0, col] = wy * a[2] - wz * a[1]
     out[1, col] = wz * a[0] - wx * a[2]
     out[2, col] = wx * a[1] - wy * a[0]
@@ -333,11 +327,12 @@ def _crm_col_times(J, k, a, out, col):
 @_jit
 def _jacobian_derivative(Jb, Vb, v, R, J_dot):
     """d/dt of one body-frame Jacobian into ``J_dot``, as
-    DecoupledDynamics._jacobian_derivatives (free joint's velocities first)."""
+    DecoupledDynamics._jacobian_derivatives (the free joint's six velocities first, then 1-DoF
+    joints; KinematicTree guarantees both)."""
     nv = v.shape[0]
     after = np.zeros(6)  # sum over later joint columns m > k of J[:, m] v_m
     for k in range(nv - 1, 5, -1):
-        _crm_col_times(Jb, k, after, J_dot, k)
+        _crm_times_into(Jb[:, k], after, J_dot, k)
         for r in range(6):
             after[r] += Jb[r, k] * v[k]
     # Free joint's columns: -crm(V) J[:, k], plus R^T (v_WBo x e_j) on the angular ones.
@@ -345,14 +340,7 @@ def _jacobian_derivative(Jb, Vb, v, R, J_dot):
     for k in range(6):
         for r in range(6):
             neg_col[r] = -Jb[r, k]
-        wx, wy, wz, vx, vy, vz = Vb[0], Vb[1], Vb[2], Vb[3], Vb[4], Vb[5]
-        a = neg_col
-        J_dot[0, k] = wy * a[2] - wz * a[1]
-        J_dot[1, k] = wz * a[0] - wx * a[2]
-        J_dot[2, k] = wx * a[1] - wy * a[0]
-        J_dot[3, k] = vy * a[2] - vz * a[1] + wy * a[5] - wz * a[4]
-        J_dot[4, k] = vz * a[0] - vx * a[2] + wz * a[3] - wx * a[5]
-        J_dot[5, k] = vx * a[1] - vy * a[0] + wx * a[4] - wy * a[3]
+        _crm_times_into(Vb, neg_col, J_dot, k)
     ux, uy, uz = v[3], v[4], v[5]
     for i in range(3):
         J_dot[3 + i, 0] += R[1, i] * uz - R[2, i] * uy  # column j of R^T hat(u): R^T (u x e_j)

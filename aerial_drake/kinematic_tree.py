@@ -51,10 +51,6 @@ class KinematicTree:
     reflected_inertia: np.ndarray  # (nv,) drive inertia added to M's diagonal
     gravity_W: np.ndarray  # (3,)
 
-    @property
-    def num_bodies(self) -> int:
-        return len(self.body_indices)
-
     def index_of(self, body: RigidBody) -> int:
         """Position of ``body`` in these arrays."""
         try:
