@@ -186,7 +186,8 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
     builder.Connect(to_generalized.get_output_port(),
                     plant.get_applied_generalized_force_input_port())
     ee_wrench = builder.AddSystem(PointWrenchApplier(
-        sim.end_effector_body, sim.end_effector_frame.GetFixedPoseInBodyFrame().translation()))
+        sim.end_effector_body, sim.end_effector_frame.GetFixedPoseInBodyFrame().translation(),
+        plant.num_bodies()))
     ee_wrench.set_name("end_effector_wrench")
     forces = builder.AddSystem(ExternallyAppliedSpatialForceMultiplexer(2))
     forces.set_name("spatial_forces")
