@@ -61,9 +61,15 @@ class _DecoupledControllerBase(_ControllerPorts):
         - ``command``: ``[f, mu (3), tau (n)]``, the inputs of (1).
         - ``diagnostics``: see :data:`aerial_drake.control.DIAGNOSTICS_LAYOUT`.
 
-    Both outputs come from one cached evaluation per context (direct feedthrough). For the
-    paper's sampled controller, put a ZeroOrderHold after ``command`` (see
-    :mod:`aerial_drake.diagram`).
+    With ``period`` 0 (continuous feedback, and what ``Linearize`` needs), both outputs come
+    from one cached evaluation per context (direct feedthrough). With ``period`` > 0 (the
+    paper's 1 kHz controller) the law runs in a periodic discrete update at t = k period that
+    writes the command and its diagnostics into the controller's discrete state, and the
+    outputs are that state (Drake's state output ports): a sample-and-hold, in one Python
+    call per sample. ``command`` then holds the sample at t_k over [t_k, t_k+1); so do the
+    ``diagnostics``, so a logger at t_k sees those of t_k-1 (the runner re-aligns its log,
+    :func:`aerial_drake.runner.run_scenario`). Set the held values at the initial state with
+    :meth:`hold_sample` (or leave the first update to do it at t = 0).
 
     Args:
         plant: the controller's model (a finalized, continuous MultibodyPlant of the system's
@@ -73,11 +79,15 @@ class _DecoupledControllerBase(_ControllerPorts):
         q3_joint_velocity_index: index in v of the joint whose angle is the 7th task coordinate.
         gains: Table II gains; validated here (a ValueError names a bad field).
         sigma_min_J3_limit, f_d_limit: thresholds of the Assumption 1 and 2 checks.
+        period: the sampling period (s); 0 for continuous feedback.
     """
 
     def _setup(self, plant: MultibodyPlant, end_effector_frame: Frame,
                q3_joint_velocity_index: int, q3_joint_position_index: int, gains: Gains, *,
-               sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT, f_d_limit: float = F_D_LIMIT):
+               sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT, f_d_limit: float = F_D_LIMIT,
+               period: float = 0.0):
+        if not period >= 0.0:
+            raise ValueError(f"period must be >= 0 (s; 0 = continuous feedback), got {period}")
         self._plant = plant
         self._gains = gains
         self._dynamics = DecoupledDynamics(plant)
@@ -91,6 +101,7 @@ class _DecoupledControllerBase(_ControllerPorts):
         self._q3_q = q3_joint_position_index
         self._limits = dict(sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit)
         self._plant_context = plant.CreateDefaultContext()
+        self._period = float(period)
         self.evaluations = 0  # number of control law evaluations (for tests and benchmarks)
         self._compiled = self._make_compiled(gains) if self._dtype is float else None
 
@@ -100,6 +111,13 @@ class _DecoupledControllerBase(_ControllerPorts):
         self._task_port = self.DeclareVectorInputPort("task_reference", TASK_REFERENCE_SIZE)
         self._heading_port = self.DeclareVectorInputPort("heading_reference",
                                                          HEADING_REFERENCE_SIZE)
+        if self._period > 0.0:
+            self._held = (self.DeclareDiscreteState(4 + self._n),
+                          self.DeclareDiscreteState(DIAGNOSTICS_SIZE))
+            self.DeclarePeriodicDiscreteUpdateEvent(self._period, 0.0, self._sample)
+            self.DeclareStateOutputPort("command", self._held[0])
+            self.DeclareStateOutputPort("diagnostics", self._held[1])
+            return
         self._solution = self.DeclareCacheEntry(
             description="control law solution",
             value_producer=ValueProducer(
@@ -112,6 +130,10 @@ class _DecoupledControllerBase(_ControllerPorts):
             "diagnostics", DIAGNOSTICS_SIZE, self._calc_diagnostics,
             prerequisites_of_calc={self._solution.ticket()})
 
+    @property
+    def period(self) -> float:
+        """The sampling period (s); 0 for continuous feedback."""
+        return self._period
 
     def _make_compiled(self, gains: Gains) -> CompiledLaw | None:
         """The compiled law (:mod:`aerial_drake.compiled`) on this plant, or None where its
@@ -181,14 +203,19 @@ class _DecoupledControllerBase(_ControllerPorts):
         self.evaluations += 1
         return compute_control(d, kin, ref, self._K, self._gravity, **self._limits)
 
-    def _calc_solution(self, context: Context, value: AbstractValue) -> None:
+    def law_at(self, context: Context) -> tuple[np.ndarray, np.ndarray]:
+        """``(command, diagnostics)`` of the law at this system's ``context``: its input ports
+        and time, as the outputs (continuous) or the next sample (sampled) would give them.
+
+        Raises:
+            AssumptionViolation, FloatingPointError: naming the context's time.
+        """
         x = self._state_port.Eval(context)
         com, task = self._com_port.Eval(context), self._task_port.Eval(context)
         heading = self._heading_port.Eval(context)
         try:
             if self._compiled is not None:
-                value.set_value(self.evaluate(x, com, task, heading))
-                return
+                return self.evaluate(x, com, task, heading)
             if not np.all(np.isfinite(value_of(x))):
                 raise FloatingPointError(NONFINITE_STATE)
             if self._dtype == object:
@@ -196,7 +223,26 @@ class _DecoupledControllerBase(_ControllerPorts):
             out = self.solve(x, com, task, heading)
         except (AssumptionViolation, FloatingPointError) as err:
             raise type(err)(f"t = {context.get_time():.4f} s: {err}") from None
-        value.set_value((np.concatenate([[out.f], out.mu, out.tau]), out.diagnostics))
+        return np.concatenate([[out.f], out.mu, out.tau]), out.diagnostics
+
+    def hold_sample(self, context: Context) -> None:
+        """Sampled controller: run the law at ``context`` and hold its result, as the periodic
+        update does (e.g. at the initial state, so the hold starts at the first command)."""
+        if self._period <= 0.0:
+            raise RuntimeError("hold_sample: this controller is continuous (period 0); it "
+                               "holds nothing")
+        command, diagnostics = self.law_at(context)
+        state = context.get_mutable_discrete_state()
+        state.set_value(int(self._held[0]), command)
+        state.set_value(int(self._held[1]), diagnostics)
+
+    def _sample(self, context: Context, discrete_state) -> None:
+        command, diagnostics = self.law_at(context)
+        discrete_state.set_value(int(self._held[0]), command)
+        discrete_state.set_value(int(self._held[1]), diagnostics)
+
+    def _calc_solution(self, context: Context, value: AbstractValue) -> None:
+        value.set_value(self.law_at(context))
 
     def _calc_command(self, context: Context, output: BasicVector) -> None:
         output.SetFromVector(self._solution.Eval(context)[0])
@@ -226,16 +272,17 @@ def DecoupledController_(T):
         def _construct(self, plant, end_effector_frame, q3_joint_velocity_index,
                        q3_joint_position_index, gains, *,
                        sigma_min_J3_limit=SIGMA_MIN_J3_LIMIT, f_d_limit=F_D_LIMIT,
-                       converter=None):
+                       period=0.0, converter=None):
             LeafSystem_[T].__init__(self, converter)
             self._setup(plant, end_effector_frame, q3_joint_velocity_index,
                         q3_joint_position_index, gains, sigma_min_J3_limit=sigma_min_J3_limit,
-                        f_d_limit=f_d_limit)
+                        f_d_limit=f_d_limit, period=period)
 
         def _construct_copy(self, other, converter=None):
             plant = other._plant.ToScalarType[T]()
             Impl._construct(self, plant, plant.get_frame(other._frame.index()), other._q3_v,
-                            other._q3_q, other._gains, **other._limits, converter=converter)
+                            other._q3_q, other._gains, **other._limits, period=other._period,
+                            converter=converter)
 
     return Impl
 
@@ -247,21 +294,41 @@ DecoupledController = DecoupledController_[None]
 
 class ZeroController(_ControllerPorts, LeafSystem):
     """The ports of :class:`DecoupledController` with all-zero outputs: a benchmark baseline
-    (the plant falls; only the cost of everything but the control law is measured)."""
+    (the plant falls; only the cost of everything but the control law is measured). Sampled
+    (``period`` > 0), its outputs are a zero discrete state that no update changes."""
 
     def __init__(self, plant: MultibodyPlant, end_effector_frame: Frame,
                  q3_joint_velocity_index: int, q3_joint_position_index: int, gains: Gains, *,
-                 sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT, f_d_limit: float = F_D_LIMIT):
+                 sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT, f_d_limit: float = F_D_LIMIT,
+                 period: float = 0.0):
         super().__init__()
         nv = plant.num_velocities()
         self.evaluations = 0
+        self._period = float(period)
+        self._sizes = (4 + nv - 6, DIAGNOSTICS_SIZE)
         self._state_port = self.DeclareVectorInputPort(
             "state", plant.num_positions() + nv)
         self.DeclareVectorInputPort("com_reference", COM_REFERENCE_SIZE)
         self.DeclareVectorInputPort("task_reference", TASK_REFERENCE_SIZE)
         self.DeclareVectorInputPort("heading_reference", HEADING_REFERENCE_SIZE)
-        self.DeclareVectorOutputPort("command", 4 + nv - 6, self._calc_zero)
-        self.DeclareVectorOutputPort("diagnostics", DIAGNOSTICS_SIZE, self._calc_zero)
+        for name, size in zip(("command", "diagnostics"), self._sizes):
+            if self._period > 0.0:
+                self.DeclareStateOutputPort(name, self.DeclareDiscreteState(size))
+            else:
+                self.DeclareVectorOutputPort(name, size, self._calc_zero)
+
+    @property
+    def period(self) -> float:
+        return self._period
+
+    def evaluate(self, x: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """Zeros, as the outputs."""
+        self.evaluations += 1
+        return np.zeros(self._sizes[0]), np.zeros(self._sizes[1])
+
+    def hold_sample(self, context: Context) -> None:
+        """Nothing to hold: the state is zero."""
 
     def _calc_zero(self, context: Context, output: BasicVector) -> None:
         self.evaluations += 1
@@ -270,11 +337,12 @@ class ZeroController(_ControllerPorts, LeafSystem):
 
 def make_controller(model: AerialManipulator, gains: Gains, *,
                     sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT,
-                    f_d_limit: float = F_D_LIMIT, zero: bool = False):
+                    f_d_limit: float = F_D_LIMIT, period: float = 0.0, zero: bool = False):
     """The controller on ``model`` (from :mod:`aerial_drake.models`), its task's q3 being the
-    arm's third joint; ``zero=True`` gives the :class:`ZeroController` baseline instead."""
+    arm's third joint, sampled every ``period`` s (0: continuous); ``zero=True`` gives the
+    :class:`ZeroController` baseline instead."""
     controller_type = ZeroController if zero else DecoupledController
     q3 = model.arm_joints[2]
     return controller_type(
         model.plant, model.end_effector_frame, q3.velocity_start(), q3.position_start(), gains,
-        sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit)
+        sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit, period=period)

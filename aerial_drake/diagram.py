@@ -1,14 +1,14 @@
 """The closed loop as one Drake Diagram (Fig. 2 of the paper).
 
 :func:`build_closed_loop` wires the simulated plant and its SceneGraph, the reference generator,
-the controller (on its own rigid-body model of the plant), the zero-order hold, the actuator lag
+the controller (on its own rigid-body model of the plant, holding its samples), the actuator lag
 and saturation, the rotor drive, and two exported disturbance input ports. The disturbance
 sources and loggers are added around it by :func:`build_simulation`.
 
 Exported ports of the closed-loop diagram:
 
 - inputs ``helicopter_wrench`` and ``end_effector_wrench``: ``[torque; force]`` in World (6).
-- outputs ``plant_state``, ``command`` (what the controller asks for, after the hold),
+- outputs ``plant_state``, ``command`` (what the controller asks for, held between samples),
   ``applied_command`` (what reaches the plant, after lag and saturation), ``diagnostics``,
   ``com_reference``, ``task_reference``, ``heading_reference``, ``query_object`` (for
   visualisers), ``rotor_drive_torque`` (rotors variant only).
@@ -22,7 +22,7 @@ import numpy as np
 from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 from pydrake.systems.primitives import (
     ConstantVectorSource, Demultiplexer, FirstOrderLowPassFilter, LogVectorOutput, MatrixGain,
-    Multiplexer, Saturation, VectorLogSink, ZeroOrderHold)
+    Multiplexer, Saturation, VectorLogSink)
 from pydrake.multibody.plant import ExternallyAppliedSpatialForceMultiplexer
 from pydrake.systems.controllers import PidController
 
@@ -44,7 +44,6 @@ class ClosedLoop:
     controller_model: AerialManipulator  # the controller's own rigid model
     controller: DecoupledController
     reference: ReferenceGenerator
-    zoh: ZeroOrderHold | None
     lag: FirstOrderLowPassFilter | None
     n_arm: int
 
@@ -144,9 +143,11 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
 
     reference = builder.AddSystem(ReferenceGenerator(scenario.trajectory))
     reference.set_name("reference")
+    # Sampling: the paper's controller runs at 1 kHz and holds its command between samples
+    # (its own discrete state); period 0 means continuous feedback.
     controller = builder.AddSystem(make_controller(
         model, scenario.gains, sigma_min_J3_limit=scenario.sigma_min_J3_limit,
-        f_d_limit=scenario.f_d_limit, zero=zero_controller))
+        f_d_limit=scenario.f_d_limit, period=scenario.controller_period, zero=zero_controller))
     controller.set_name("controller")
     for port in ("com_reference", "task_reference", "heading_reference"):
         builder.Connect(reference.GetOutputPort(port), controller.GetInputPort(port))
@@ -163,14 +164,7 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
         builder.Connect(state_out, selector.get_input_port())
         builder.Connect(selector.get_output_port(), controller.get_state_input_port())
 
-    # Sampling: the paper's controller runs at 1 kHz; period 0 means continuous feedback.
     command = controller.get_command_output_port()
-    zoh = None
-    if scenario.controller_period > 0:
-        zoh = builder.AddSystem(ZeroOrderHold(scenario.controller_period, 4 + n))
-        zoh.set_name("sample_hold")
-        builder.Connect(command, zoh.get_input_port())
-        command = zoh.get_output_port()
     builder.ExportOutput(command, "command")
     builder.ExportOutput(controller.get_diagnostics_output_port(), "diagnostics")
 
@@ -205,7 +199,7 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
     diagram = builder.Build()
     diagram.set_name(name)
     return ClosedLoop(diagram=diagram, simulated_plant=sim, controller_model=model,
-                      controller=controller, reference=reference, zoh=zoh, lag=lag, n_arm=n)
+                      controller=controller, reference=reference, lag=lag, n_arm=n)
 
 
 def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: Scenario):

@@ -117,12 +117,14 @@ def set_initial_state(scenario: Scenario, loop: ClosedLoop, plant_context: Conte
 
 
 def _prime_held_inputs(loop: ClosedLoop, context: Context) -> None:
-    """Start the hold and the lag at the controller's first command, so t = 0 has no step."""
-    cmd = loop.controller.get_command_output_port().Eval(
-        loop.controller.GetMyContextFromRoot(context))
-    if loop.zoh is not None:
-        loop.zoh.SetVectorState(loop.zoh.GetMyMutableContextFromRoot(context), cmd)
+    """Start the controller's hold and the lag at the controller's first command, so t = 0 has
+    no step."""
+    controller = loop.controller
+    controller_context = controller.GetMyMutableContextFromRoot(context)
+    if controller.period > 0:
+        controller.hold_sample(controller_context)
     if loop.lag is not None:
+        cmd = controller.get_command_output_port().Eval(controller_context)
         loop.lag.set_initial_output_value(loop.lag.GetMyMutableContextFromRoot(context),
                                           cmd[:4])
 
@@ -206,10 +208,11 @@ def _simulate(simulator: Simulator, loop: ClosedLoop, pauses: list[float],
     return failure, interrupted, time.perf_counter() - start
 
 
-def _collect_log(scenario: Scenario, loggers: dict[str, VectorLogSink],
+def _collect_log(scenario: Scenario, loop: ClosedLoop, loggers: dict[str, VectorLogSink],
                  context: Context) -> dict[str, np.ndarray]:
     """The loggers' samples as ``{"t": times, port: (samples, size)}``, cut to a common
-    length, with the references at the sample times (what the reference ports gave there)."""
+    length, with the references at the sample times (what the reference ports gave there)
+    and, for a sampled controller, the diagnostics re-aligned to their sample times."""
     log = {port: logger.FindLog(context) for port, logger in loggers.items()}
     arrays = {"t": log["plant_state"].sample_times()}
     for port, entry in log.items():
@@ -218,6 +221,35 @@ def _collect_log(scenario: Scenario, loggers: dict[str, VectorLogSink],
     arrays = {k: v[:n] for k, v in arrays.items()}
     references = sample_reference(scenario.trajectory, arrays["t"]).to_vectors()
     arrays.update(zip(("com_reference", "task_reference", "heading_reference"), references))
+    if loop.controller.period > 0 and n > 0:
+        arrays = _align_held_diagnostics(arrays, loop)
+    return arrays
+
+
+def _align_held_diagnostics(arrays: dict[str, np.ndarray], loop: ClosedLoop,
+                            ) -> dict[str, np.ndarray]:
+    """Each sample's diagnostics at its own time.
+
+    A sampled controller holds the diagnostics of its sample at t_k with the command, and the
+    loggers publish at t_k before the update at t_k: the logged row k holds the diagnostics of
+    t_k-1 (row 0, the primed hold, those of t_0). So row k is taken from logged row k+1, and
+    the last row's from the law at the last logged state and references (what the update at
+    that time computes, to the last bit). Where the law refuses that state: an assumption
+    violated, the run stopped there, so the row goes (as a failed sample logs nothing); a
+    non-finite state, the row stays with NaN diagnostics (the run is cut at that sample).
+    """
+    held = arrays["diagnostics"]
+    x = arrays["plant_state"][-1][loop.simulated_plant.rigid_state_indices]
+    try:
+        last = loop.controller.evaluate(x, *(arrays[k][-1] for k in (
+            "com_reference", "task_reference", "heading_reference")))[1]
+    except FloatingPointError:
+        last = np.full(held.shape[1], np.nan)
+    except AssumptionViolation:
+        arrays = {k: v[:-1] for k, v in arrays.items()}
+        arrays["diagnostics"] = held[1:]
+        return arrays
+    arrays["diagnostics"] = np.vstack([held[1:], last])
     return arrays
 
 
@@ -271,7 +303,7 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
         simulator, loop, pause_times(scenario.duration, scenario.log_period), progress_lines)
     if progress and _is_terminal(stream):
         stream.write("\n")  # end the self-rewriting progress line
-    arrays = _collect_log(scenario, loggers, context)
+    arrays = _collect_log(scenario, loop, loggers, context)
     sim_time = float(context.get_time())
     diverged = _first_non_finite_sample(arrays)
     if diverged is not None:

@@ -16,6 +16,6 @@ def test_diagram_script_runs(script, tmp_path):
                           timeout=300)
     assert done.returncode == 0, done.stderr
     dot = next(tmp_path.glob("*_closed_loop.dot")).read_text()
-    for block in ("plant", "controller", "reference", "sample_hold", "base_actuator"):
+    for block in ("plant", "controller", "reference", "end_effector_wrench", "base_actuator"):
         assert block in dot
     assert next(tmp_path.glob("*/metrics.json")).is_file()
