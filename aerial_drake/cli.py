@@ -173,7 +173,14 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    return args.func(args)
+    try:
+        return args.func(args)
+    except KeyboardInterrupt:
+        # A Ctrl-C in the simulation is handled by the runner (logs written, exit 130); this is
+        # one before it started (loading, compiling, solving the initial pose) or after it.
+        print("interrupted (Ctrl-C) outside the simulation; nothing more written",
+              file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

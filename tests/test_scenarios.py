@@ -124,3 +124,16 @@ def test_cli_paper_refuses_viewer_options(capsys):
 
     assert cli.main(["run", "paper", "--meshcat"]) == 2
     assert "watch one scenario" in capsys.readouterr().err
+
+
+def test_cli_ctrl_c_before_the_simulation_exits_130(tmp_path, capsys, monkeypatch):
+    """A Ctrl-C while the scenario loads (before the runner's own handling) is a clean exit
+    130 with a message, not a traceback."""
+    from aerial_drake import cli, scenarios
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(scenarios, "load_scenario", interrupted)
+    assert cli.main(["run", "nominal", "--out", str(tmp_path), "--quiet"]) == 130
+    assert "interrupted (Ctrl-C) outside the simulation" in capsys.readouterr().err
