@@ -325,18 +325,19 @@ def _crm_times_into(s, a, out, col):
 
 
 @_jit
-def _jacobian_derivative(Jb, Vb, v, R, J_dot):
+def _jacobian_derivative(Jb, Vb, v, R, J_dot, work):
     """d/dt of one body-frame Jacobian into ``J_dot``, as
     DecoupledDynamics._jacobian_derivatives (the free joint's six velocities first, then 1-DoF
-    joints; KinematicTree guarantees both)."""
+    joints; KinematicTree guarantees both). ``work``: a 6-vector of scratch space."""
     nv = v.shape[0]
-    after = np.zeros(6)  # sum over later joint columns m > k of J[:, m] v_m
+    after = work  # sum over later joint columns m > k of J[:, m] v_m
+    after[:] = 0.0
     for k in range(nv - 1, 5, -1):
         _crm_times_into(Jb[:, k], after, J_dot, k)
         for r in range(6):
             after[r] += Jb[r, k] * v[k]
     # Free joint's columns: -crm(V) J[:, k], plus R^T (v_WBo x e_j) on the angular ones.
-    neg_col = np.empty(6)
+    neg_col = work
     for k in range(6):
         for r in range(6):
             neg_col[r] = -Jb[r, k]
@@ -351,12 +352,55 @@ def _jacobian_derivative(Jb, Vb, v, R, J_dot):
 # --- Section II ------------------------------------------------------------------------------
 
 @_jit
-def _decompose(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_MC, axis_F,
-               inertia, mass, com_B, reflected, gravity_W):
-    """Every quantity of :class:`aerial_drake.decoupling.Decomposition` that the law uses,
-    with the same formulas (see that module)."""
+def _coriolis_kernel(I, Vb, A):
+    """A = crf(V) I + I crm(V) + Hbar (crf(V) = -crm(V)^T), the 6x6 matrix of body b's
+    Christoffel-consistent Coriolis term (design notes, section 3), into ``A``."""
+    wx, wy, wz, vx, vy, vz = Vb[0], Vb[1], Vb[2], Vb[3], Vb[4], Vb[5]
+    # I crm(V) column by column (crm(V) = [[w x, 0], [v x, w x]]); crf(V) I = -(I crm(V))^T
+    # as I is symmetric.
+    for i in range(6):
+        a0, a1, a2, a3, a4, a5 = I[i, 0], I[i, 1], I[i, 2], I[i, 3], I[i, 4], I[i, 5]
+        A[i, 0] = a1 * wz - a2 * wy + a4 * vz - a5 * vy
+        A[i, 1] = a2 * wx - a0 * wz + a5 * vx - a3 * vz
+        A[i, 2] = a0 * wy - a1 * wx + a3 * vy - a4 * vx
+        A[i, 3] = a4 * wz - a5 * wy
+        A[i, 4] = a5 * wx - a3 * wz
+        A[i, 5] = a3 * wy - a4 * wx
+    for i in range(6):
+        for j in range(i + 1, 6):
+            d = A[i, j] - A[j, i]
+            A[i, j], A[j, i] = d, -d
+        A[i, i] = 0.0
+    h0, h1, h2, h3, h4, h5 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    for k in range(6):
+        h0 += I[0, k] * Vb[k]
+        h1 += I[1, k] * Vb[k]
+        h2 += I[2, k] * Vb[k]
+        h3 += I[3, k] * Vb[k]
+        h4 += I[4, k] * Vb[k]
+        h5 += I[5, k] * Vb[k]
+    # Hbar = [[-hat(h_w), -hat(h_v)], [-hat(h_v), 0]]
+    A[0, 1] += h2
+    A[0, 2] -= h1
+    A[1, 0] -= h2
+    A[1, 2] += h0
+    A[2, 0] += h1
+    A[2, 1] -= h0
+    for (r0, c0) in ((0, 3), (3, 0)):
+        A[r0 + 0, c0 + 1] += h5
+        A[r0 + 0, c0 + 2] -= h4
+        A[r0 + 1, c0 + 0] -= h5
+        A[r0 + 1, c0 + 2] += h3
+        A[r0 + 2, c0 + 0] += h4
+        A[r0 + 2, c0 + 1] -= h3
+
+
+@_jit
+def _body_sums(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_MC, axis_F,
+               inertia, mass, com_B, reflected):
+    """The sums over bodies of Section II: M, the Christoffel-consistent C, the CoM, its
+    Jacobian J_g and J_g_dot, with the kinematics they come from."""
     nb, nv = parent.shape[0], v.shape[0]
-    n = nv - 6
     R_all, p_all, J = _kinematics(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF,
                                   R_MC, p_MC, axis_F)
     m = 0.0
@@ -365,7 +409,6 @@ def _decompose(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_M
         m += mass[b]
         if joint_type[b] == FREE:
             base = b
-    R = R_all[base]
 
     M = np.zeros((nv, nv))
     C = np.zeros((nv, nv))
@@ -385,7 +428,7 @@ def _decompose(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_M
                 ncols[b] += 1
             a = parent[a]
     Vb = np.empty(6)
-    crm_V = np.zeros((6, 6))
+    work = np.empty(6)
     A = np.empty((6, 6))
     IJ = np.empty((6, nv))
     inner = np.empty((6, nv))
@@ -396,44 +439,17 @@ def _decompose(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_M
             for k in range(nv):
                 s += Jb[r, k] * v[k]
             Vb[r] = s
-        _jacobian_derivative(Jb, Vb, v, R_all[b], J_dot)
+        _jacobian_derivative(Jb, Vb, v, R_all[b], J_dot, work)
         if mass[b] == 0.0:
             continue
         I = inertia[b]
-        # Christoffel-consistent Coriolis matrix (design notes, section 3):
-        # C += J^T (I J_dot + 1/2 (crf(V) I + I crm(V) + Hbar) J), crf(V) = -crm(V)^T.
-        wx, wy, wz, vx, vy, vz = Vb[0], Vb[1], Vb[2], Vb[3], Vb[4], Vb[5]
-        crm_V[0, 1], crm_V[0, 2], crm_V[1, 0], crm_V[1, 2], crm_V[2, 0], crm_V[2, 1] = \
-            -wz, wy, wz, -wx, -wy, wx
-        crm_V[3:, 3:] = crm_V[:3, :3]
-        crm_V[3, 1], crm_V[3, 2], crm_V[4, 0], crm_V[4, 2], crm_V[5, 0], crm_V[5, 1] = \
-            -vz, vy, vz, -vx, -vy, vx
-        for i in range(6):
-            for j in range(6):
-                s = 0.0
-                for k in range(6):
-                    s += I[i, k] * crm_V[k, j] - crm_V[k, i] * I[k, j]
-                A[i, j] = s
-        h0, h1, h2, h3, h4, h5 = (I[0] * Vb).sum(), (I[1] * Vb).sum(), (I[2] * Vb).sum(), \
-            (I[3] * Vb).sum(), (I[4] * Vb).sum(), (I[5] * Vb).sum()
-        # Hbar = [[-hat(h_w), -hat(h_v)], [-hat(h_v), 0]]
-        A[0, 1] += h2
-        A[0, 2] -= h1
-        A[1, 0] -= h2
-        A[1, 2] += h0
-        A[2, 0] += h1
-        A[2, 1] -= h0
-        for (r0, c0) in ((0, 3), (3, 0)):
-            A[r0 + 0, c0 + 1] += h5
-            A[r0 + 0, c0 + 2] -= h4
-            A[r0 + 1, c0 + 0] -= h5
-            A[r0 + 1, c0 + 2] += h3
-            A[r0 + 2, c0 + 0] += h4
-            A[r0 + 2, c0 + 1] -= h3
+        # C += J^T (I J_dot + 1/2 A J), M += J^T I J over the nonzero columns; M is
+        # symmetric: each pair once.
+        _coriolis_kernel(I, Vb, A)
         nc = ncols[b]
-        for i in range(6):
-            for c in range(nc):
-                k = cols[b, c]
+        for c in range(nc):
+            k = cols[b, c]
+            for i in range(6):
                 s_ij, s_in = 0.0, 0.0
                 for j in range(6):
                     s_ij += I[i, j] * Jb[j, k]
@@ -443,18 +459,25 @@ def _decompose(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_M
             i = cols[b, ci]
             for ck in range(nc):
                 k = cols[b, ck]
-                sm, sc = 0.0, 0.0
+                sc = 0.0
                 for r in range(6):
-                    sm += Jb[r, i] * IJ[r, k]
                     sc += Jb[r, i] * inner[r, k]
-                M[i, k] += sm
                 C[i, k] += sc
+                if ck >= ci:
+                    sm = 0.0
+                    for r in range(6):
+                        sm += Jb[r, i] * IJ[r, k]
+                    M[i, k] += sm
+                    if k != i:
+                        M[k, i] += sm
         # CoM Jacobian: sum m_i/m R_i P_i J_i, with P_i J_i = J_v - c x J_w, and its
         # derivative sum m_i/m (R_i hat(w_i) P_i J_i + R_i P_i J_dot_i).
         frac = mass[b] / m
         Rb = R_all[b]
+        wx, wy, wz = Vb[0], Vb[1], Vb[2]
         cx, cy, cz = com_B[b, 0], com_B[b, 1], com_B[b, 2]
-        for k in range(nv):
+        for c in range(nc):
+            k = cols[b, c]
             ax, ay, az = Jb[0, k], Jb[1, k], Jb[2, k]
             px = Jb[3, k] - (cy * az - cz * ay)
             py = Jb[4, k] - (cz * ax - cx * az)
@@ -470,39 +493,102 @@ def _decompose(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_M
             p_WG[r] += frac * (p_all[b, r] + Rb[r, 0] * cx + Rb[r, 1] * cy + Rb[r, 2] * cz)
     for k in range(nv):
         M[k, k] += reflected[k]
-    g = -m * _mtv(J_g, gravity_W)  # -(gravity generalized force)
+    return m, base, R_all, p_all, J, J_dot_all, M, C, J_g, J_g_dot, p_WG
 
-    RT = R.T.copy()
+
+@_jit
+def _z_times_into(G, X, identity, out):
+    """out = Z X for the closed-form null-space base Z = [0, -A_q^T, E_n] with A_q = G[:, 6:]
+    (design notes, section 2): G = J_g gives Z, G = J_g_dot and ``identity`` False Z_dot.
+    Z's four nonzeros a row, written out."""
+    for r in range(out.shape[0]):
+        g0, g1, g2 = G[0, 6 + r], G[1, 6 + r], G[2, 6 + r]
+        for c in range(X.shape[1]):
+            s = -g0 * X[3, c] - g1 * X[4, c] - g2 * X[5, c]
+            out[r, c] = s + X[6 + r, c] if identity else s
+
+
+@_jit
+def _times_zt_into(X, G, identity, out):
+    """out = X Z^T, Z as in _z_times_into."""
+    for i in range(X.shape[0]):
+        x0, x1, x2 = X[i, 3], X[i, 4], X[i, 5]
+        for r in range(out.shape[1]):
+            s = -x0 * G[0, 6 + r] - x1 * G[1, 6 + r] - x2 * G[2, 6 + r]
+            out[i, r] = s + X[i, 6 + r] if identity else s
+
+
+@_jit
+def _transformation(v, R, M, C, J_g, J_g_dot):
+    """T of (3), its derivative, N of (4) and N_dot, and T^-1."""
+    nv = v.shape[0]
+    n = nv - 6
     J_bw = np.zeros((3, nv))
-    J_bw[:, :3] = RT
     J_bw_dot = np.zeros((3, nv))
-    J_bw_dot[:, :3] = -_mm(_hat(_mv(RT, v[:3])), RT)
+    # J_bw = [R^T, 0, 0], J_bw_dot = [-hat(R^T w) R^T, 0, 0] (w = v[:3] in World).
+    wx = R[0, 0] * v[0] + R[1, 0] * v[1] + R[2, 0] * v[2]
+    wy = R[0, 1] * v[0] + R[1, 1] * v[1] + R[2, 1] * v[2]
+    wz = R[0, 2] * v[0] + R[1, 2] * v[1] + R[2, 2] * v[2]
+    for j in range(3):
+        J_bw[0, j], J_bw[1, j], J_bw[2, j] = R[j, 0], R[j, 1], R[j, 2]
+        J_bw_dot[0, j] = -(wy * R[j, 2] - wz * R[j, 1])
+        J_bw_dot[1, j] = -(wz * R[j, 0] - wx * R[j, 2])
+        J_bw_dot[2, j] = -(wx * R[j, 1] - wy * R[j, 0])
 
-    # Closed-form null-space base Z = [0, -A_q^T, E_n] (design notes, section 2).
-    Z = np.zeros((n, nv))
-    Z_dot = np.zeros((n, nv))
-    for r in range(n):
-        for j in range(3):
-            Z[r, 3 + j] = -J_g[j, 6 + r]
-            Z_dot[r, 3 + j] = -J_g_dot[j, 6 + r]
-        Z[r, 6 + r] = 1.0
-    M_dot = C + C.T
-    ZM = _mm(Z, M)
-    ZMZ = _mm(ZM, Z.T.copy())
+    ZM = np.empty((n, nv))
+    ZdM = np.empty((n, nv))
+    ZMd = np.empty((n, nv))
+    ZMZ = np.empty((n, n))
+    _z_times_into(J_g, M, True, ZM)
+    _times_zt_into(ZM, J_g, True, ZMZ)
     LU, piv = _lu(ZMZ)
     N = _lu_solve(LU, piv, ZM)  # (4)
-    ZdM = _mm(Z_dot, M)
-    ZMd = _mm(Z, M_dot)
-    ZMZ_dot = _mm(ZdM, Z.T.copy()) + _mm(ZMd, Z.T.copy()) + _mm(ZM, Z_dot.T.copy())
-    N_dot = _lu_solve(LU, piv, ZdM + ZMd - _mm(ZMZ_dot, N))
+    _z_times_into(J_g_dot, M, False, ZdM)
+    _z_times_into(J_g, C + C.T, True, ZMd)  # Z M_dot, M_dot = C + C^T
+    # d/dt (Z M Z^T) = Z_dot M Z^T + Z M_dot Z^T + Z M Z_dot^T
+    a, b, c = np.empty((n, n)), np.empty((n, n)), np.empty((n, n))
+    _times_zt_into(ZdM, J_g, True, a)
+    _times_zt_into(ZMd, J_g, True, b)
+    _times_zt_into(ZM, J_g_dot, False, c)
+    rhs = ZdM + ZMd
+    for i in range(n):
+        for k in range(n):
+            f = (a[i, k] + b[i, k]) + c[i, k]
+            if f != 0.0:
+                for j in range(nv):
+                    rhs[i, j] -= f * N[k, j]
+    N_dot = _lu_solve(LU, piv, rhs)
 
     T = np.empty((nv, nv))  # (3)
     T_dot = np.empty((nv, nv))
     T[:3], T[3:6], T[6:] = J_g, J_bw, N
     T_dot[:3], T_dot[3:6], T_dot[6:] = J_g_dot, J_bw_dot, N_dot
-    T_inv = _inv(T)
-    Lambda = _mtm(T_inv, _mm(M, T_inv))  # (5)
-    Gamma = _mtm(T_inv, _mm(C - _mm(M, _mm(T_inv, T_dot)), T_inv))  # (6)
+    return N, N_dot, T, T_dot, _inv(T)
+
+
+@_jit
+def _lambda_gamma(M, C, T_inv, T_dot, first):
+    """Rows and columns ``first:`` of Lambda = T^-T M T^-1 (5) and
+    Gamma = T^-T (C - M T^-1 T_dot) T^-1 (6), from the columns P = T^-1[:, first:]:
+    P^T M P and P^T (C P - M T^-1 (T_dot P))."""
+    P = T_inv[:, first:].copy()
+    MP = _mm(M, P)
+    X = _mm(C, P) - _mm(M, _mm(T_inv, _mm(T_dot, P)))
+    return _mtm(P, MP), _mtm(P, X)
+
+
+@_jit
+def _decompose(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_MC, axis_F,
+               inertia, mass, com_B, reflected, gravity_W):
+    """Every quantity of :class:`aerial_drake.decoupling.Decomposition`, with the same
+    formulas (see that module)."""
+    m, base, R_all, p_all, J, J_dot_all, M, C, J_g, J_g_dot, p_WG = _body_sums(
+        q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_MC, axis_F, inertia,
+        mass, com_B, reflected)
+    R = R_all[base]
+    g = -m * _mtv(J_g, gravity_W)  # -(gravity generalized force)
+    N, N_dot, T, T_dot, T_inv = _transformation(v, R, M, C, J_g, J_g_dot)
+    Lambda, Gamma = _lambda_gamma(M, C, T_inv, T_dot, 0)
     xi = _mv(T, v)
     return (m, R, p_all, R_all, J, J_dot_all, M, C, g, J_g, J_g_dot, p_WG, N, N_dot, T, T_dot,
             T_inv, Lambda, Gamma, xi)
@@ -565,10 +651,14 @@ def _law(x, nq, com, task, heading, parent, joint_type, q_start, v_start, R_PF, 
     q, v = x[:nq], x[nq:]
     nv = v.shape[0]
     n = nv - 6
-    (m, R, p_all, R_all, Jall, J_dot_all, M, C, g, J_g, J_g_dot, p_WG, N, N_dot, T, T_dot,
-     T_inv, Lambda, Gamma, xi) = _decompose(q, v, parent, joint_type, q_start, v_start, R_PF,
-                                            p_PF, R_MC, p_MC, axis_F, inertia, mass, com_B,
-                                            reflected, gravity_W)
+    m, base, R_all, p_all, Jall, J_dot_all, M, C, J_g, J_g_dot, p_WG = _body_sums(
+        q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_MC, axis_F, inertia,
+        mass, com_B, reflected)
+    R = R_all[base]
+    N, N_dot, T, T_dot, T_inv = _transformation(v, R, M, C, J_g, J_g_dot)
+    # Only Lambda's and Gamma's rows and columns 3: enter the law.
+    Lambda, Gamma = _lambda_gamma(M, C, T_inv, T_dot, 3)
+    xi = _mv(T, v)
     K_x, D_x, k_R, k_w = gains[0:3], gains[3:6], gains[6], gains[7]
     L2, L2_inv = gains[8:11], gains[11:14]
     K_y, K_z = gains[14:14 + n], gains[14 + n:14 + 2 * n]
@@ -609,9 +699,9 @@ def _law(x, nq, com, task, heading, parent, joint_type, q_start, v_start, R_PF, 
     e_R = _vee(RdtR)  # (14)
     w_t = w_b - w_d  # (15)
     w_b_dot = w_d_dot - L2_inv * (k_R * e_R + k_w * w_t)
-    Lambda22 = Lambda[3:6, 3:6].copy()
-    Gamma22 = Gamma[3:6, 3:6].copy()
-    Gamma23 = Gamma[3:6, 6:].copy()
+    Lambda22 = Lambda[:3, :3].copy()
+    Gamma22 = Gamma[:3, :3].copy()
+    Gamma23 = Gamma[:3, 3:].copy()
     u2 = _mv(Gamma22, w_b) + _mv(Lambda22, w_b_dot)  # (16)
 
     # Task kinematics: the end-effector frame E on body ee_body, and q3.
@@ -656,7 +746,7 @@ def _law(x, nq, com, task, heading, parent, joint_type, q_start, v_start, R_PF, 
     z_d_dot = (y_d_ddot - _mv(J1, xg_dd) - _mv(J1_dot, xg_dot) - _mv(J2, w_b_dot)
                - _mv(J2_dot, w_b) - K_y * y_t_dot)  # (20)
     J3_inv = _inv(J3)
-    Lambda33, Gamma33 = Lambda[6:, 6:].copy(), Gamma[6:, 6:].copy()
+    Lambda33, Gamma33 = Lambda[3:, 3:].copy(), Gamma[3:, 3:].copy()
     Lambda_z = _mtm(J3_inv, _mm(Lambda33, J3_inv))  # (19)
     Gamma_z = _mtm(J3_inv, _mm(Gamma33 - _mm(Lambda33, _mm(J3_inv, J3_dot)), J3_inv))
     u3 = _mtv(J3, _mv(Lambda_z, z_d_dot) + _mv(Gamma_z, z_d) - K_z * z_t)
