@@ -416,22 +416,19 @@ def _body_sums(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_M
     J_g_dot = np.zeros((3, nv))
     p_WG = np.zeros(3)
     J_dot_all = np.zeros((nb, 6, nv))
-    # The columns of body b's Jacobian that can be nonzero: its ancestors' velocities.
-    cols = np.empty((nb, nv), dtype=np.int64)
-    ncols = np.zeros(nb, dtype=np.int64)
-    for b in range(nb):
-        a = b
-        while a >= 0:
-            width = 6 if joint_type[a] == FREE else (1 if joint_type[a] == REVOLUTE else 0)
-            for j in range(width):
-                cols[b, ncols[b]] = v_start[a] + j
-                ncols[b] += 1
-            a = parent[a]
+    cols = np.empty(nv, dtype=np.int64)
     Vb = np.empty(6)
     work = np.empty(6)
     A = np.empty((6, 6))
+    # Body b's nonzero Jacobian columns (its ancestors' velocities) gathered side by side, and
+    # the products of its mass and Coriolis terms over them, so that the inner loops run over
+    # contiguous memory.
+    Jc = np.empty((6, nv))
+    Jdc = np.empty((6, nv))
     IJ = np.empty((6, nv))
     inner = np.empty((6, nv))
+    row_m = np.empty(nv)
+    row_c = np.empty(nv)
     for b in range(nb):
         Jb, J_dot = J[b], J_dot_all[b]
         for r in range(6):
@@ -442,34 +439,41 @@ def _body_sums(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_M
         _jacobian_derivative(Jb, Vb, v, R_all[b], J_dot, work)
         if mass[b] == 0.0:
             continue
+        nc = 0
+        a = b
+        while a >= 0:
+            width = 6 if joint_type[a] == FREE else (1 if joint_type[a] == REVOLUTE else 0)
+            for j in range(width):
+                cols[nc] = v_start[a] + j
+                nc += 1
+            a = parent[a]
+        for r in range(6):
+            for c in range(nc):
+                Jc[r, c] = Jb[r, cols[c]]
+                Jdc[r, c] = J_dot[r, cols[c]]
+        # M += J^T I J, C += J^T (I J_dot + 1/2 A J) (design notes, section 3).
         I = inertia[b]
-        # C += J^T (I J_dot + 1/2 A J), M += J^T I J over the nonzero columns; M is
-        # symmetric: each pair once.
         _coriolis_kernel(I, Vb, A)
-        nc = ncols[b]
-        for c in range(nc):
-            k = cols[b, c]
-            for i in range(6):
-                s_ij, s_in = 0.0, 0.0
-                for j in range(6):
-                    s_ij += I[i, j] * Jb[j, k]
-                    s_in += I[i, j] * J_dot[j, k] + 0.5 * A[i, j] * Jb[j, k]
-                IJ[i, k], inner[i, k] = s_ij, s_in
+        for i in range(6):
+            IJ[i, :nc] = 0.0
+            inner[i, :nc] = 0.0
+            for j in range(6):
+                f, h = I[i, j], 0.5 * A[i, j]
+                for c in range(nc):
+                    IJ[i, c] += f * Jc[j, c]
+                    inner[i, c] += f * Jdc[j, c] + h * Jc[j, c]
         for ci in range(nc):
-            i = cols[b, ci]
-            for ck in range(nc):
-                k = cols[b, ck]
-                sc = 0.0
-                for r in range(6):
-                    sc += Jb[r, i] * inner[r, k]
-                C[i, k] += sc
-                if ck >= ci:
-                    sm = 0.0
-                    for r in range(6):
-                        sm += Jb[r, i] * IJ[r, k]
-                    M[i, k] += sm
-                    if k != i:
-                        M[k, i] += sm
+            row_m[:nc] = 0.0
+            row_c[:nc] = 0.0
+            for r in range(6):
+                f = Jc[r, ci]
+                for c in range(nc):
+                    row_m[c] += f * IJ[r, c]
+                    row_c[c] += f * inner[r, c]
+            i = cols[ci]
+            for c in range(nc):
+                M[i, cols[c]] += row_m[c]
+                C[i, cols[c]] += row_c[c]
         # CoM Jacobian: sum m_i/m R_i P_i J_i, with P_i J_i = J_v - c x J_w, and its
         # derivative sum m_i/m (R_i hat(w_i) P_i J_i + R_i P_i J_dot_i).
         frac = mass[b] / m
@@ -477,15 +481,15 @@ def _body_sums(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_M
         wx, wy, wz = Vb[0], Vb[1], Vb[2]
         cx, cy, cz = com_B[b, 0], com_B[b, 1], com_B[b, 2]
         for c in range(nc):
-            k = cols[b, c]
-            ax, ay, az = Jb[0, k], Jb[1, k], Jb[2, k]
-            px = Jb[3, k] - (cy * az - cz * ay)
-            py = Jb[4, k] - (cz * ax - cx * az)
-            pz = Jb[5, k] - (cx * ay - cy * ax)
-            ax, ay, az = J_dot[0, k], J_dot[1, k], J_dot[2, k]
-            dx = J_dot[3, k] - (cy * az - cz * ay) + (wy * pz - wz * py)
-            dy = J_dot[4, k] - (cz * ax - cx * az) + (wz * px - wx * pz)
-            dz = J_dot[5, k] - (cx * ay - cy * ax) + (wx * py - wy * px)
+            k = cols[c]
+            ax, ay, az = Jc[0, c], Jc[1, c], Jc[2, c]
+            px = Jc[3, c] - (cy * az - cz * ay)
+            py = Jc[4, c] - (cz * ax - cx * az)
+            pz = Jc[5, c] - (cx * ay - cy * ax)
+            ax, ay, az = Jdc[0, c], Jdc[1, c], Jdc[2, c]
+            dx = Jdc[3, c] - (cy * az - cz * ay) + (wy * pz - wz * py)
+            dy = Jdc[4, c] - (cz * ax - cx * az) + (wz * px - wx * pz)
+            dz = Jdc[5, c] - (cx * ay - cy * ax) + (wx * py - wy * px)
             for r in range(3):
                 J_g[r, k] += frac * (Rb[r, 0] * px + Rb[r, 1] * py + Rb[r, 2] * pz)
                 J_g_dot[r, k] += frac * (Rb[r, 0] * dx + Rb[r, 1] * dy + Rb[r, 2] * dz)
@@ -578,6 +582,43 @@ def _lambda_gamma(M, C, T_inv, T_dot, first):
 
 
 @_jit
+def _lambda_times(M, T_inv, y):
+    """Lambda y = T^-T (M (T^-1 y)) (5): the law applies Lambda and Gamma to vectors only, so
+    it never forms them (13x13 products) but multiplies through."""
+    return _mtv(T_inv, _mv(M, _mv(T_inv, y)))
+
+
+@_jit
+def _gamma_times(M, C, T_inv, T_dot, y):
+    """Gamma y = T^-T (C u - M T^-1 (T_dot u)), u = T^-1 y (6)."""
+    u = _mv(T_inv, y)
+    return _mtv(T_inv, _mv(C, u) - _mv(M, _mv(T_inv, _mv(T_dot, u))))
+
+
+@_jit
+def _gamma_t_times(M, C, T_inv, T_dot, y):
+    """Gamma^T y = T^-T (C^T u - T_dot^T T^-T (M u)), u = T^-1 y (6)."""
+    u = _mv(T_inv, y)
+    return _mtv(T_inv, _mtv(C, u) - _mtv(T_dot, _mtv(T_inv, _mv(M, u))))
+
+
+@_jit
+def _jt_dot_times(J_y_dot, Jt, T_dot, T_inv, y):
+    """Jt_dot y for Jt_dot = (J_y_dot - Jt T_dot) T^-1, the derivative of Jt = J_y T^-1
+    (d/dt T^-1 = -T^-1 T_dot T^-1)."""
+    u = _mv(T_inv, y)
+    return _mv(J_y_dot, u) - _mv(Jt, _mv(T_dot, u))
+
+
+@_jit
+def _embed(nv, first, a):
+    """The nv-vector that is ``a`` at ``first:first + len(a)`` and zero elsewhere."""
+    out = np.zeros(nv)
+    out[first:first + a.shape[0]] = a
+    return out
+
+
+@_jit
 def _decompose(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_MC, axis_F,
                inertia, mass, com_B, reflected, gravity_W):
     """Every quantity of :class:`aerial_drake.decoupling.Decomposition`, with the same
@@ -656,8 +697,6 @@ def _law(x, nq, com, task, heading, parent, joint_type, q_start, v_start, R_PF, 
         mass, com_B, reflected)
     R = R_all[base]
     N, N_dot, T, T_dot, T_inv = _transformation(v, R, M, C, J_g, J_g_dot)
-    # Only Lambda's and Gamma's rows and columns 3: enter the law.
-    Lambda, Gamma = _lambda_gamma(M, C, T_inv, T_dot, 3)
     xi = _mv(T, v)
     K_x, D_x, k_R, k_w = gains[0:3], gains[3:6], gains[6], gains[7]
     L2, L2_inv = gains[8:11], gains[11:14]
@@ -699,10 +738,9 @@ def _law(x, nq, com, task, heading, parent, joint_type, q_start, v_start, R_PF, 
     e_R = _vee(RdtR)  # (14)
     w_t = w_b - w_d  # (15)
     w_b_dot = w_d_dot - L2_inv * (k_R * e_R + k_w * w_t)
-    Lambda22 = Lambda[:3, :3].copy()
-    Gamma22 = Gamma[:3, :3].copy()
-    Gamma23 = Gamma[:3, 3:].copy()
-    u2 = _mv(Gamma22, w_b) + _mv(Lambda22, w_b_dot)  # (16)
+    # u2 = Gamma22 w_b + Lambda22 w_b_dot (16), and Gamma23 rho of (8) with it.
+    Gamma2_xi = _gamma_times(M, C, T_inv, T_dot, _embed(nv, 3, xi[3:]))[3:6]
+    Lambda2_wd = _lambda_times(M, T_inv, _embed(nv, 3, w_b_dot))[3:6]
 
     # Task kinematics: the end-effector frame E on body ee_body, and q3.
     Ri, pi = R_all[ee_body], p_all[ee_body]
@@ -725,9 +763,7 @@ def _law(x, nq, com, task, heading, parent, joint_type, q_start, v_start, R_PF, 
 
     # Task control (17)-(20).
     Jt = _mm(J_y, T_inv)
-    Jt_dot = _mm(J_y_dot - _mm(Jt, T_dot), T_inv)
-    J1, J2, J3 = Jt[:, :3].copy(), Jt[:, 3:6].copy(), Jt[:, 6:].copy()
-    J1_dot, J2_dot, J3_dot = Jt_dot[:, :3].copy(), Jt_dot[:, 3:6].copy(), Jt_dot[:, 6:].copy()
+    J3 = Jt[:, 6:].copy()
     sigma_min = math.sqrt(max(_min_eigenvalue_sym(_mtm(J3, J3)), 0.0))
     if not sigma_min > limits[0]:
         return ASSUMPTION_1, f_d_norm, sigma_min
@@ -741,18 +777,26 @@ def _law(x, nq, com, task, heading, parent, joint_type, q_start, v_start, R_PF, 
     y_d_ddot = np.concatenate((task[20:26], task[26:27]))
     y_t_dot = _mv(Jt, xi) - y_d_dot  # (17)
     z = _mv(J3, rho)
-    z_d = y_d_dot - _mv(J1, xg_dot) - _mv(J2, w_b) - K_y * y_t
+    x12 = _embed(nv, 0, xi[:6])  # [xg_dot; w_b; 0]
+    z_d = y_d_dot - _mv(Jt, x12) - K_y * y_t  # J1 xg_dot + J2 w_b = Jt [xg_dot; w_b; 0]
     z_t = z - z_d  # (18)
-    z_d_dot = (y_d_ddot - _mv(J1, xg_dd) - _mv(J1_dot, xg_dot) - _mv(J2, w_b_dot)
-               - _mv(J2_dot, w_b) - K_y * y_t_dot)  # (20)
+    a12 = np.zeros(nv)  # [xg_dd; w_b_dot; 0]
+    a12[:3], a12[3:6] = xg_dd, w_b_dot
+    z_d_dot = (y_d_ddot - _mv(Jt, a12) - _jt_dot_times(J_y_dot, Jt, T_dot, T_inv, x12)
+               - K_y * y_t_dot)  # (20)
+    # (19): Lambda_z = J3^-T Lambda33 J3^-1, Gamma_z = J3^-T (Gamma33 - Lambda33 J3^-1 J3_dot)
+    # J3^-1, applied to vectors.
     J3_inv = _inv(J3)
-    Lambda33, Gamma33 = Lambda[3:, 3:].copy(), Gamma[3:, 3:].copy()
-    Lambda_z = _mtm(J3_inv, _mm(Lambda33, J3_inv))  # (19)
-    Gamma_z = _mtm(J3_inv, _mm(Gamma33 - _mm(Lambda33, _mm(J3_inv, J3_dot)), J3_inv))
-    u3 = _mtv(J3, _mv(Lambda_z, z_d_dot) + _mv(Gamma_z, z_d) - K_z * z_t)
+    s_d = _embed(nv, 6, _mv(J3_inv, z_d))  # [0; 0; J3^-1 z_d]
+    J3_dot_s = _jt_dot_times(J_y_dot, Jt, T_dot, T_inv, s_d)
+    Gamma_z_zd = _mtv(J3_inv, _gamma_times(M, C, T_inv, T_dot, s_d)[6:]
+                      - _lambda_times(M, T_inv, _embed(nv, 6, _mv(J3_inv, J3_dot_s)))[6:])
+    Lambda_z_zdd = _mtv(J3_inv, _lambda_times(M, T_inv, _embed(nv, 6, _mv(J3_inv, z_d_dot)))[6:])
+    u3 = _mtv(J3, Lambda_z_zdd + Gamma_z_zd - K_z * z_t)
 
     # Input mapping (8), (22).
-    u_prime = np.concatenate((u1 * Re3, _mv(Gamma23, rho) + u2, -_mtv(Gamma23, w_b) + u3))
+    u_prime = np.concatenate((u1 * Re3, Gamma2_xi + Lambda2_wd,
+                              -_gamma_t_times(M, C, T_inv, T_dot, _embed(nv, 3, w_b))[6:] + u3))
     F = _mtv(T, u_prime)  # (22)
     mu = _mtv(R, F[:3])
     force_b = _mtv(R, F[3:6])
@@ -761,7 +805,8 @@ def _law(x, nq, com, task, heading, parent, joint_type, q_start, v_start, R_PF, 
     command[4:] = F[6:]
 
     # Diagnostics (24)-(25), in DIAGNOSTICS_LAYOUT order.
-    V_task = 0.5 * _dot(z_t, _mv(Lambda_z, z_t)) + _dot(y_t, K_y * K_z * y_t)  # (24)
+    Lambda_z_zt = _mtv(J3_inv, _lambda_times(M, T_inv, _embed(nv, 6, _mv(J3_inv, z_t)))[6:])
+    V_task = 0.5 * _dot(z_t, Lambda_z_zt) + _dot(y_t, K_y * K_z * y_t)  # (24)
     V1 = (0.5 * m * _dot(x_t_dot, x_t_dot) + 0.5 * _dot(x_t, K_x * x_t)
           + gamma1 * _dot(x_t, x_t_dot) + 0.5 * _dot(w_t, L2 * w_t)
           + 0.5 * k_R * (3.0 - RdtR[0, 0] - RdtR[1, 1] - RdtR[2, 2])
