@@ -56,13 +56,21 @@ def _mtm(A, B):
 
 @_jit
 def _mv(A, x):
+    """A x, two rows at a time: two independent sums in flight instead of one (the same sums,
+    in the same order)."""
     n, k = A.shape
-    out = np.zeros(n)
-    for i in range(n):
-        s = 0.0
+    out = np.empty(n)
+    for i in range(0, n - 1, 2):
+        s0, s1 = 0.0, 0.0
         for p in range(k):
-            s += A[i, p] * x[p]
-        out[i] = s
+            s0 += A[i, p] * x[p]
+            s1 += A[i + 1, p] * x[p]
+        out[i], out[i + 1] = s0, s1
+    if n % 2:
+        s0 = 0.0
+        for p in range(k):
+            s0 += A[n - 1, p] * x[p]
+        out[n - 1] = s0
     return out
 
 
@@ -172,6 +180,13 @@ def _inv(A):
 
 
 @_jit
+def _rotate_pair(A, i, j, k, l, c, s):
+    g, h = A[i, j], A[k, l]
+    A[i, j] = c * g - s * h
+    A[k, l] = s * g + c * h
+
+
+@_jit
 def _min_eigenvalue_sym(S):
     """Smallest eigenvalue of a symmetric matrix (cyclic Jacobi; high relative accuracy)."""
     A = S.copy()
@@ -180,7 +195,7 @@ def _min_eigenvalue_sym(S):
         off = 0.0
         for i in range(n):
             for j in range(i + 1, n):
-                off += A[i, j] * A[i, j]
+                off += A[i, j] * A[i, j]  # upper triangle
         scale = 0.0
         for i in range(n):
             scale += A[i, i] * A[i, i]
@@ -195,14 +210,17 @@ def _min_eigenvalue_sym(S):
                 t = (1.0 if theta >= 0.0 else -1.0) / (abs(theta) + math.sqrt(theta * theta + 1.0))
                 c = 1.0 / math.sqrt(t * t + 1.0)
                 s = t * c
-                for k in range(n):  # A <- A G
-                    akp, akq = A[k, p], A[k, q]
-                    A[k, p] = c * akp - s * akq
-                    A[k, q] = s * akp + c * akq
-                for k in range(n):  # A <- G^T A
-                    apk, aqk = A[p, k], A[q, k]
-                    A[p, k] = c * apk - s * aqk
-                    A[q, k] = s * apk + c * aqk
+                # A <- G^T A G on the upper triangle only (A stays symmetric): the rotation
+                # zeroes A[p, q] and mixes the rest of rows and columns p and q.
+                A[p, p] -= t * apq
+                A[q, q] += t * apq
+                A[p, q] = 0.0
+                for k in range(p):
+                    _rotate_pair(A, k, p, k, q, c, s)
+                for k in range(p + 1, q):
+                    _rotate_pair(A, p, k, k, q, c, s)
+                for k in range(q + 1, n):
+                    _rotate_pair(A, p, k, q, k, c, s)
     lowest = A[0, 0]
     for i in range(1, n):
         lowest = min(lowest, A[i, i])
@@ -468,12 +486,16 @@ def _body_sums(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_M
             for r in range(6):
                 f = Jc[r, ci]
                 for c in range(nc):
-                    row_m[c] += f * IJ[r, c]
                     row_c[c] += f * inner[r, c]
+                for c in range(ci, nc):  # M is symmetric: each pair of columns once
+                    row_m[c] += f * IJ[r, c]
             i = cols[ci]
             for c in range(nc):
-                M[i, cols[c]] += row_m[c]
                 C[i, cols[c]] += row_c[c]
+            M[i, i] += row_m[ci]
+            for c in range(ci + 1, nc):
+                M[i, cols[c]] += row_m[c]
+                M[cols[c], i] += row_m[c]
         # CoM Jacobian: sum m_i/m R_i P_i J_i, with P_i J_i = J_v - c x J_w, and its
         # derivative sum m_i/m (R_i hat(w_i) P_i J_i + R_i P_i J_dot_i).
         frac = mass[b] / m
@@ -589,10 +611,10 @@ def _lambda_times(M, T_inv, y):
 
 
 @_jit
-def _gamma_times(M, C, T_inv, T_dot, y):
-    """Gamma y = T^-T (C u - M T^-1 (T_dot u)), u = T^-1 y (6)."""
-    u = _mv(T_inv, y)
-    return _mtv(T_inv, _mv(C, u) - _mv(M, _mv(T_inv, _mv(T_dot, u))))
+def _lambda_gamma_times(M, C, T_inv, T_dot, a, b):
+    """Lambda a + Gamma b = T^-T (M T^-1 (a - T_dot u) + C u), u = T^-1 b (5)-(6)."""
+    u = _mv(T_inv, b)
+    return _mtv(T_inv, _mv(M, _mv(T_inv, a - _mv(T_dot, u))) + _mv(C, u))
 
 
 @_jit
@@ -738,9 +760,9 @@ def _law(x, nq, com, task, heading, parent, joint_type, q_start, v_start, R_PF, 
     e_R = _vee(RdtR)  # (14)
     w_t = w_b - w_d  # (15)
     w_b_dot = w_d_dot - L2_inv * (k_R * e_R + k_w * w_t)
-    # u2 = Gamma22 w_b + Lambda22 w_b_dot (16), and Gamma23 rho of (8) with it.
-    Gamma2_xi = _gamma_times(M, C, T_inv, T_dot, _embed(nv, 3, xi[3:]))[3:6]
-    Lambda2_wd = _lambda_times(M, T_inv, _embed(nv, 3, w_b_dot))[3:6]
+    # u2 = Lambda22 w_b_dot + Gamma22 w_b (16), and Gamma23 rho of (8) with it.
+    u2_rho = _lambda_gamma_times(M, C, T_inv, T_dot, _embed(nv, 3, w_b_dot),
+                                 _embed(nv, 3, xi[3:]))[3:6]
 
     # Task kinematics: the end-effector frame E on body ee_body, and q3.
     Ri, pi = R_all[ee_body], p_all[ee_body]
@@ -789,13 +811,15 @@ def _law(x, nq, com, task, heading, parent, joint_type, q_start, v_start, R_PF, 
     J3_inv = _inv(J3)
     s_d = _embed(nv, 6, _mv(J3_inv, z_d))  # [0; 0; J3^-1 z_d]
     J3_dot_s = _jt_dot_times(J_y_dot, Jt, T_dot, T_inv, s_d)
-    Gamma_z_zd = _mtv(J3_inv, _gamma_times(M, C, T_inv, T_dot, s_d)[6:]
-                      - _lambda_times(M, T_inv, _embed(nv, 6, _mv(J3_inv, J3_dot_s)))[6:])
-    Lambda_z_zdd = _mtv(J3_inv, _lambda_times(M, T_inv, _embed(nv, 6, _mv(J3_inv, z_d_dot)))[6:])
-    u3 = _mtv(J3, Lambda_z_zdd + Gamma_z_zd - K_z * z_t)
+    # Lambda_z z_d_dot + Gamma_z z_d
+    #   = J3^-T (Lambda33 J3^-1 (z_d_dot - J3_dot s) + Gamma33 s), s = J3^-1 z_d.
+    zz = _mtv(J3_inv, _lambda_gamma_times(M, C, T_inv, T_dot,
+                                          _embed(nv, 6, _mv(J3_inv, z_d_dot - J3_dot_s)),
+                                          s_d)[6:])
+    u3 = _mtv(J3, zz - K_z * z_t)
 
     # Input mapping (8), (22).
-    u_prime = np.concatenate((u1 * Re3, Gamma2_xi + Lambda2_wd,
+    u_prime = np.concatenate((u1 * Re3, u2_rho,
                               -_gamma_t_times(M, C, T_inv, T_dot, _embed(nv, 3, w_b))[6:] + u3))
     F = _mtv(T, u_prime)  # (22)
     mu = _mtv(R, F[:3])
