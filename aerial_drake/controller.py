@@ -294,8 +294,10 @@ DecoupledController = DecoupledController_[None]
 
 class ZeroController(_ControllerPorts, LeafSystem):
     """The ports of :class:`DecoupledController` with all-zero outputs: a benchmark baseline
-    (the plant falls; only the cost of everything but the control law is measured). Sampled
-    (``period`` > 0), its outputs are a zero discrete state that no update changes."""
+    (the plant falls; only the cost of everything but the control law is measured: the
+    plant, the reference and the logging). Sampled (``period`` > 0), it reads its inputs at
+    every sample as the real controller does, so the reference is generated, and its outputs
+    are a zero discrete state."""
 
     def __init__(self, plant: MultibodyPlant, end_effector_frame: Frame,
                  q3_joint_velocity_index: int, q3_joint_position_index: int, gains: Gains, *,
@@ -316,6 +318,8 @@ class ZeroController(_ControllerPorts, LeafSystem):
                 self.DeclareStateOutputPort(name, self.DeclareDiscreteState(size))
             else:
                 self.DeclareVectorOutputPort(name, size, self._calc_zero)
+        if self._period > 0.0:
+            self.DeclarePeriodicDiscreteUpdateEvent(self._period, 0.0, self._sample)
 
     @property
     def period(self) -> float:
@@ -329,6 +333,12 @@ class ZeroController(_ControllerPorts, LeafSystem):
 
     def hold_sample(self, context: Context) -> None:
         """Nothing to hold: the state is zero."""
+
+    def _sample(self, context: Context, discrete_state) -> None:
+        # Read every input, as DecoupledController.law_at does; the held zeros stay.
+        for i in range(self.num_input_ports()):
+            self.get_input_port(i).Eval(context)
+        self.evaluations += 1
 
     def _calc_zero(self, context: Context, output: BasicVector) -> None:
         self.evaluations += 1

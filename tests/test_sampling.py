@@ -92,7 +92,7 @@ def test_sampled_law_failure_names_the_time(scenario):
         Simulator(diagram).AdvanceTo(0.0005)
 
 
-def test_zero_controller_holds_zeros(scenario):
+def test_zero_controller_holds_zeros_and_samples_its_inputs(scenario):
     diagram, controller, _ = controller_with_sources(scenario, at_reference(scenario),
                                                      zero=True)
     simulator = Simulator(diagram)
@@ -100,6 +100,9 @@ def test_zero_controller_holds_zeros(scenario):
     ctrl_context = controller.GetMyContextFromRoot(simulator.get_context())
     assert not np.any(controller.get_command_output_port().Eval(ctrl_context))
     assert not np.any(controller.get_diagnostics_output_port().Eval(ctrl_context))
+    # It read its inputs (the reference is generated, as for the real controller) at each
+    # sample before t = 0.01 s: 0, 1, ..., 9 ms.
+    assert controller.evaluations == 10
 
 
 def test_negative_period_is_refused(scenario):
