@@ -1,0 +1,65 @@
+"""The floor under the real-time factor: the simulated plant alone, integrated as the paper's
+runs integrate it (continuous MultibodyPlant, runge_kutta3 at a fixed 1 ms step, the
+scenario's simulator settings), with constant zero inputs and no other system.
+
+Prints, per plant variant, the median wall time per step in microseconds and the real-time
+factor that this alone allows; the closed loop cannot be faster (docs/performance.md).
+
+    python benchmarks/bench_plant.py [--repeats 3] [--duration 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import statistics
+import time
+
+import numpy as np
+from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
+from pydrake.systems.framework import DiagramBuilder
+from pydrake.systems.primitives import ConstantVectorSource
+
+from aerial_drake.models import add_to_builder
+from aerial_drake.scenarios import load_scenario
+
+#: The scenario whose simulator settings (integrator, step) are used for each plant variant.
+SCENARIOS = {"rigid": "nominal", "rotors": "disturbed"}
+
+
+def step_time(variant: str, duration: float) -> float:
+    """Wall time per 1 ms step (s) of the plant alone over ``duration`` simulated seconds."""
+    scenario = load_scenario(SCENARIOS[variant])
+    builder = DiagramBuilder()
+    sim = add_to_builder(builder, variant, time_step=0.0)
+    plant = sim.plant
+    for instance in (sim.arm, sim.helicopter):
+        size = plant.num_actuated_dofs(instance)
+        if size:
+            zero = builder.AddSystem(ConstantVectorSource(np.zeros(size)))
+            builder.Connect(zero.get_output_port(), plant.get_actuation_input_port(instance))
+    simulator = Simulator(builder.Build())
+    ApplySimulatorConfig(scenario.simulator, simulator)
+    simulator.Initialize()
+    start = time.perf_counter()
+    simulator.AdvanceTo(duration)
+    wall = time.perf_counter() - start
+    return wall / simulator.get_num_steps_taken()
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--duration", type=float, default=5.0)
+    args = parser.parse_args()
+    print(f"machine: {platform.machine()}, {platform.platform()}, python "
+          f"{platform.python_version()}")
+    print(f"{'plant':>8} {'us/step':>9} {'RT factor (plant alone)':>24}")
+    for variant in SCENARIOS:
+        median = statistics.median(step_time(variant, args.duration)
+                                   for _ in range(args.repeats))
+        print(f"{variant:>8} {1e6 * median:9.1f} {1e-3 / median:24.1f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,24 @@
+"""The benchmark scripts run and print their figures (smoke tests with tiny sizes; the
+figures themselves belong in docs/performance.md, not in timed tests)."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
+
+
+@pytest.mark.parametrize("script, args, expected", [
+    ("bench_plant.py", ["--repeats", "1", "--duration", "0.05"], ["rigid", "rotors"]),
+    ("bench_decomposition.py", ["--repeats", "20"], ["compiled", "ratio"]),
+    ("bench_sim.py", ["--repeats", "1", "--duration", "0.05", "--scenarios", "nominal"],
+     ["nominal", "peak RSS"]),
+])
+def test_benchmark_runs(script, args, expected):
+    done = subprocess.run([sys.executable, str(BENCHMARKS / script), *args],
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    for word in expected:
+        assert word in done.stdout
