@@ -23,7 +23,11 @@ import sys
 import numpy as np
 from numba import njit
 
+from aerial_drake.control import DIAGNOSTICS_SIZE
 from aerial_drake.kinematic_tree import FREE, REVOLUTE, KinematicTree
+from aerial_drake.reference import (
+    COM_REFERENCE_SIZE, HEADING_REFERENCE_SIZE, TASK_REFERENCE_SIZE, unpack_heading_reference,
+    unpack_task_reference)
 
 # error_model="numpy": a division by zero gives inf/nan as in the numpy path (and the checks
 # of Assumptions 1 and 2 report it) instead of raising ZeroDivisionError mid-law.
@@ -593,14 +597,11 @@ def _transformation(v, R, M, C, J_g, J_g_dot):
 
 
 @_jit
-def _lambda_gamma(M, C, T_inv, T_dot, first):
-    """Rows and columns ``first:`` of Lambda = T^-T M T^-1 (5) and
-    Gamma = T^-T (C - M T^-1 T_dot) T^-1 (6), from the columns P = T^-1[:, first:]:
-    P^T M P and P^T (C P - M T^-1 (T_dot P))."""
-    P = T_inv[:, first:].copy()
-    MP = _mm(M, P)
-    X = _mm(C, P) - _mm(M, _mm(T_inv, _mm(T_dot, P)))
-    return _mtm(P, MP), _mtm(P, X)
+def _lambda_gamma(M, C, T_inv, T_dot):
+    """Lambda = T^-T M T^-1 (5) and Gamma = T^-T (C - M T^-1 T_dot) T^-1 (6), formed (for
+    :func:`decompose`; the law only applies them to vectors)."""
+    X = C - _mm(M, _mm(T_inv, T_dot))
+    return _mtm(T_inv, _mm(M, T_inv)), _mtm(T_inv, _mm(X, T_inv))
 
 
 @_jit
@@ -651,7 +652,7 @@ def _decompose(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_M
     R = R_all[base]
     g = -m * _mtv(J_g, gravity_W)  # -(gravity generalized force)
     N, N_dot, T, T_dot, T_inv = _transformation(v, R, M, C, J_g, J_g_dot)
-    Lambda, Gamma = _lambda_gamma(M, C, T_inv, T_dot, 0)
+    Lambda, Gamma = _lambda_gamma(M, C, T_inv, T_dot)
     xi = _mv(T, v)
     return (m, R, p_all, R_all, J, J_dot_all, M, C, g, J_g, J_g_dot, p_WG, N, N_dot, T, T_dot,
             T_inv, Lambda, Gamma, xi)
@@ -703,8 +704,8 @@ def _norm(a):
 
 @_jit
 def _law(x, nq, com, task, heading, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC,
-         p_MC, axis_F, inertia, mass, com_B, reflected, gravity_W, ee_body, R_BE, p_BE, q3_q, q3_v,
-         gains, limits, command, diagnostics):
+         p_MC, axis_F, inertia, mass, com_B, reflected, ee_body, R_BE, p_BE, q3_q, q3_v, gains,
+         limits, command, diagnostics):
     """The law (10)-(22) at state ``x``, as control.compute_control; writes ``command``
     ``[f, mu, tau]`` and ``diagnostics`` (control.DIAGNOSTICS_LAYOUT). Returns
     ``(status, f_d_norm, sigma_min)``; on a status other than OK the outputs are incomplete."""
@@ -851,9 +852,11 @@ def _law(x, nq, com, task, heading, parent, joint_type, q_start, v_start, R_PF, 
 # --- Python entry points ---------------------------------------------------------------------
 
 def _tree_args(tree: KinematicTree) -> tuple:
+    """The tree's arrays in the order the kernels take them (gravity apart: only
+    :func:`_decompose` takes it; the law has g among its gains)."""
     return (tree.parent, tree.joint_type, tree.q_start, tree.v_start, tree.R_PF, tree.p_PF,
             tree.R_MC, tree.p_MC, tree.axis_F, tree.spatial_inertia, tree.mass, tree.com_B,
-            tree.reflected_inertia, tree.gravity_W)
+            tree.reflected_inertia)
 
 
 _DECOMPOSITION_FIELDS = ("m", "R", "p_all", "R_all", "body_J", "body_J_dot", "M", "C", "g",
@@ -866,7 +869,8 @@ def decompose(tree: KinematicTree, q: np.ndarray, v: np.ndarray) -> dict[str, np
     :class:`aerial_drake.decoupling.Decomposition`; ``p_all``/``R_all``/``body_J``/
     ``body_J_dot`` are per body of ``tree``). For tests and benchmarks."""
     values = _decompose(np.ascontiguousarray(q, dtype=float),
-                        np.ascontiguousarray(v, dtype=float), *_tree_args(tree))
+                        np.ascontiguousarray(v, dtype=float), *_tree_args(tree),
+                        tree.gravity_W)
     return dict(zip(_DECOMPOSITION_FIELDS, values))
 
 
@@ -920,11 +924,11 @@ class CompiledLaw:
         nv = tree.reflected_inertia.size
         x = np.zeros(self._nq + nv)
         x[0] = 1.0  # unit quaternion, all else zero
-        task, heading = np.zeros(27), np.zeros(9)
-        task[3:12] = np.eye(3).ravel()
-        heading[0] = 1.0
-        n = nv - 6
-        self(x, np.zeros(15), task, heading, np.empty(4 + n), np.empty(23 + 2 * n))
+        com, task = np.zeros(COM_REFERENCE_SIZE), np.zeros(TASK_REFERENCE_SIZE)
+        heading = np.zeros(HEADING_REFERENCE_SIZE)
+        unpack_task_reference(task).R_ed[:] = np.eye(3)  # views into the vectors
+        unpack_heading_reference(heading)[0, 0] = 1.0  # b1d = e_x
+        self(x, com, task, heading, np.empty(4 + nv - 6), np.empty(DIAGNOSTICS_SIZE))
 
     def __call__(self, x: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
                  command: np.ndarray, diagnostics: np.ndarray) -> tuple[int, float, float]:

@@ -36,7 +36,23 @@ NONFINITE_STATE = ("the plant state is not finite (the simulation diverged befor
 
 
 class _ControllerPorts:
-    """Port accessors shared by the controllers (same port names and sizes)."""
+    """Port accessors and the sampled outputs shared by the controllers (same port names and
+    sizes)."""
+
+    @property
+    def period(self) -> float:
+        """The sampling period (s); 0 for continuous feedback."""
+        return self._period
+
+    def _declare_held_outputs(self, sizes: tuple[int, int], update) -> tuple:
+        """The sampled outputs: ``command`` and ``diagnostics`` (``sizes``) as discrete state,
+        read by state output ports and written by ``update`` every :attr:`period` from
+        t = 0. Returns the two discrete state indices."""
+        held = tuple(self.DeclareDiscreteState(size) for size in sizes)
+        self.DeclarePeriodicDiscreteUpdateEvent(self._period, 0.0, update)
+        for name, index in zip(("command", "diagnostics"), held):
+            self.DeclareStateOutputPort(name, index)
+        return held
 
     def get_state_input_port(self):
         return self._state_port
@@ -112,11 +128,8 @@ class _DecoupledControllerBase(_ControllerPorts):
         self._heading_port = self.DeclareVectorInputPort("heading_reference",
                                                          HEADING_REFERENCE_SIZE)
         if self._period > 0.0:
-            self._held = (self.DeclareDiscreteState(4 + self._n),
-                          self.DeclareDiscreteState(DIAGNOSTICS_SIZE))
-            self.DeclarePeriodicDiscreteUpdateEvent(self._period, 0.0, self._sample)
-            self.DeclareStateOutputPort("command", self._held[0])
-            self.DeclareStateOutputPort("diagnostics", self._held[1])
+            self._held = self._declare_held_outputs((4 + self._n, DIAGNOSTICS_SIZE),
+                                                    self._sample)
             return
         self._solution = self.DeclareCacheEntry(
             description="control law solution",
@@ -129,11 +142,6 @@ class _DecoupledControllerBase(_ControllerPorts):
         self.DeclareVectorOutputPort(
             "diagnostics", DIAGNOSTICS_SIZE, self._calc_diagnostics,
             prerequisites_of_calc={self._solution.ticket()})
-
-    @property
-    def period(self) -> float:
-        """The sampling period (s); 0 for continuous feedback."""
-        return self._period
 
     def _make_compiled(self, gains: Gains) -> CompiledLaw | None:
         """The compiled law (:mod:`aerial_drake.compiled`) on this plant, or None where its
@@ -231,10 +239,7 @@ class _DecoupledControllerBase(_ControllerPorts):
         if self._period <= 0.0:
             raise RuntimeError("hold_sample: this controller is continuous (period 0); it "
                                "holds nothing")
-        command, diagnostics = self.law_at(context)
-        state = context.get_mutable_discrete_state()
-        state.set_value(int(self._held[0]), command)
-        state.set_value(int(self._held[1]), diagnostics)
+        self._sample(context, context.get_mutable_discrete_state())
 
     def _sample(self, context: Context, discrete_state) -> None:
         command, diagnostics = self.law_at(context)
@@ -313,17 +318,11 @@ class ZeroController(_ControllerPorts, LeafSystem):
         self.DeclareVectorInputPort("com_reference", COM_REFERENCE_SIZE)
         self.DeclareVectorInputPort("task_reference", TASK_REFERENCE_SIZE)
         self.DeclareVectorInputPort("heading_reference", HEADING_REFERENCE_SIZE)
-        for name, size in zip(("command", "diagnostics"), self._sizes):
-            if self._period > 0.0:
-                self.DeclareStateOutputPort(name, self.DeclareDiscreteState(size))
-            else:
-                self.DeclareVectorOutputPort(name, size, self._calc_zero)
         if self._period > 0.0:
-            self.DeclarePeriodicDiscreteUpdateEvent(self._period, 0.0, self._sample)
-
-    @property
-    def period(self) -> float:
-        return self._period
+            self._declare_held_outputs(self._sizes, self._sample)
+        else:
+            for name, size in zip(("command", "diagnostics"), self._sizes):
+                self.DeclareVectorOutputPort(name, size, self._calc_zero)
 
     def evaluate(self, x: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
                  ) -> tuple[np.ndarray, np.ndarray]:

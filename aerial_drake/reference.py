@@ -411,8 +411,9 @@ def _fill_reference(k: np.ndarray, t: float, out: np.ndarray) -> None:
 
     # (28) basic motion x_c = center + A_b [-sin(w_b t), -cos(w_b t), sin(w_b t) + c t].
     angle = w_b * t
-    sb = _sin_derivatives(sin(angle), cos(angle), w_b, A_b)
-    cb = _cos_derivatives(sin(angle), cos(angle), w_b, A_b)
+    s_b, c_b = sin(angle), cos(angle)
+    sb = _sin_derivatives(s_b, c_b, w_b, A_b)
+    cb = _cos_derivatives(s_b, c_b, w_b, A_b)
     climb = (A_b * climb_rate * t, A_b * climb_rate, 0.0, 0.0, 0.0)
     x_c = np.empty((5, 3))
     for n in range(5):
@@ -436,8 +437,9 @@ def _fill_reference(k: np.ndarray, t: float, out: np.ndarray) -> None:
     # (28) agile motion A_a [sin(w_a t), cos(w_a t), cos(w_a t)], added to x_c for x_ed; its
     # value, velocity and acceleration are the task's p_ed, v_ed, a_ed.
     angle = w_a * t
-    sa = _sin_derivatives(sin(angle), cos(angle), w_a, A_a)
-    ca = _cos_derivatives(sin(angle), cos(angle), w_a, A_a)
+    s_a, c_a = sin(angle), cos(angle)
+    sa = _sin_derivatives(s_a, c_a, w_a, A_a)
+    ca = _cos_derivatives(s_a, c_a, w_a, A_a)
     for n, start in enumerate((_TASK_P.start, _TASK_V.start, _TASK_A.start)):
         task[start] = x_c[n, 0] + sa[n]
         task[start + 1] = x_c[n, 1] + ca[n]

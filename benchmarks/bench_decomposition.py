@@ -56,5 +56,6 @@ def main() -> None:
               f"({args.repeats} evaluations)")
     print(f"ratio: {statistics.median(reference) / statistics.median(fast):.1f}x")
 
+
 if __name__ == "__main__":
     main()
