@@ -47,12 +47,12 @@ class _ControllerPorts:
     def _declare_held_outputs(self, sizes: tuple[int, int], update) -> tuple:
         """The sampled outputs: ``command`` and ``diagnostics`` (``sizes``) as discrete state,
         read by state output ports and written by ``update`` every :attr:`period` from
-        t = 0. Returns the two discrete state indices."""
+        t = 0. Returns the two discrete state indices (as ints)."""
         held = tuple(self.DeclareDiscreteState(size) for size in sizes)
         self.DeclarePeriodicDiscreteUpdateEvent(self._period, 0.0, update)
         for name, index in zip(("command", "diagnostics"), held):
             self.DeclareStateOutputPort(name, index)
-        return held
+        return tuple(int(index) for index in held)
 
     def get_state_input_port(self):
         return self._state_port
@@ -173,6 +173,14 @@ class _DecoupledControllerBase(_ControllerPorts):
             out = self.solve(x, com, task, heading)
             return np.concatenate([[out.f], out.mu, out.tau]), out.diagnostics
         command, diagnostics = np.empty(4 + self._n), np.empty(DIAGNOSTICS_SIZE)
+        self._evaluate_into(x, com, task, heading, command, diagnostics)
+        return command, diagnostics
+
+    def _evaluate_into(self, x: np.ndarray, com: np.ndarray, task: np.ndarray,
+                       heading: np.ndarray, command: np.ndarray, diagnostics: np.ndarray,
+                       ) -> None:
+        """The compiled law, written into ``command`` and ``diagnostics`` (which may be views
+        of a context's discrete state); raises as :meth:`evaluate`."""
         status, f_d_norm, sigma_min = self._compiled(x, com, task, heading, command, diagnostics)
         self.evaluations += 1
         if status == NONFINITE:
@@ -182,7 +190,6 @@ class _DecoupledControllerBase(_ControllerPorts):
         if status == ASSUMPTION_1:
             raise AssumptionViolation(
                 assumption_1_message(sigma_min, self._limits["sigma_min_J3_limit"]))
-        return command, diagnostics
 
     def solve(self, x: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
               ) -> ControlOutput:
@@ -218,9 +225,7 @@ class _DecoupledControllerBase(_ControllerPorts):
         Raises:
             AssumptionViolation, FloatingPointError: naming the context's time.
         """
-        x = self._state_port.Eval(context)
-        com, task = self._com_port.Eval(context), self._task_port.Eval(context)
-        heading = self._heading_port.Eval(context)
+        x, com, task, heading = self._inputs(context)
         try:
             if self._compiled is not None:
                 return self.evaluate(x, com, task, heading)
@@ -230,8 +235,13 @@ class _DecoupledControllerBase(_ControllerPorts):
                 com, task, heading = (_reference_values(r) for r in (com, task, heading))
             out = self.solve(x, com, task, heading)
         except (AssumptionViolation, FloatingPointError) as err:
-            raise type(err)(f"t = {context.get_time():.4f} s: {err}") from None
+            raise _at_time(err, context) from None
         return np.concatenate([[out.f], out.mu, out.tau]), out.diagnostics
+
+    def _inputs(self, context: Context) -> tuple[np.ndarray, ...]:
+        """The state and the three references at ``context``."""
+        return (self._state_port.Eval(context), self._com_port.Eval(context),
+                self._task_port.Eval(context), self._heading_port.Eval(context))
 
     def hold_sample(self, context: Context) -> None:
         """Sampled controller: run the law at ``context`` and hold its result, as the periodic
@@ -242,9 +252,21 @@ class _DecoupledControllerBase(_ControllerPorts):
         self._sample(context, context.get_mutable_discrete_state())
 
     def _sample(self, context: Context, discrete_state) -> None:
-        command, diagnostics = self.law_at(context)
-        discrete_state.set_value(int(self._held[0]), command)
-        discrete_state.set_value(int(self._held[1]), diagnostics)
+        command_index, diagnostics_index = self._held
+        if self._compiled is None:
+            command, diagnostics = self.law_at(context)
+            discrete_state.set_value(command_index, command)
+            discrete_state.set_value(diagnostics_index, diagnostics)
+            return
+        # The compiled law writes straight into the update's state (numpy views of Drake's
+        # vectors): no copies, and each Python-to-C++ call saved counts at 1 kHz. On a
+        # failure the update is abandoned, so a partial write never reaches the context.
+        try:
+            self._evaluate_into(*self._inputs(context),
+                                discrete_state.get_mutable_value(command_index),
+                                discrete_state.get_mutable_value(diagnostics_index))
+        except (AssumptionViolation, FloatingPointError) as err:
+            raise _at_time(err, context) from None
 
     def _calc_solution(self, context: Context, value: AbstractValue) -> None:
         value.set_value(self.law_at(context))
@@ -254,6 +276,11 @@ class _DecoupledControllerBase(_ControllerPorts):
 
     def _calc_diagnostics(self, context: Context, output: BasicVector) -> None:
         output.SetFromVector(self._solution.Eval(context)[1])
+
+
+def _at_time(err: Exception, context: Context) -> Exception:
+    """``err`` again, its message prefixed by the context's time."""
+    return type(err)(f"t = {context.get_time():.4f} s: {err}")
 
 
 def _reference_values(reference: np.ndarray) -> np.ndarray:
