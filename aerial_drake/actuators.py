@@ -4,8 +4,8 @@
   body wrench at the helicopter's frame (2), with Drake's ``Propeller`` system.
 - :func:`free_body_wrench_map` and :class:`PointWrenchApplier`: external disturbance wrenches
   (World) at the helicopter frame and at the end effector.
-- :func:`lag_time_constant`: the first-order actuator lag of the disturbed case; the lag itself
-  is Drake's ``FirstOrderLowPassFilter`` and the limits Drake's ``Saturation`` (wired in
+- :func:`lag_time_constant` and :class:`ActuatorLag`: the first-order actuator lag of the
+  disturbed case (a Drake ``LinearSystem``); the limits are Drake's ``Saturation`` (wired in
   :mod:`aerial_drake.diagram`).
 """
 
@@ -19,13 +19,49 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import Propeller, PropellerInfo
 from pydrake.multibody.tree import RigidBody
 from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.primitives import ConstantValueSource
+from pydrake.systems.framework import Context
+from pydrake.systems.primitives import ConstantValueSource, LinearSystem
 
 
 def lag_time_constant(rise_time: float) -> float:
     """Time constant of a first-order system whose 10-90% rise time is ``rise_time``:
     ``rise_time / ln 9`` (0.1 s -> 0.0455 s)."""
     return rise_time / math.log(9.0)
+
+
+class ActuatorLag(LinearSystem):
+    """A first-order lag with time constant ``time_constant`` on the first ``lagged`` entries
+    of its input, the next ``passed`` entries passed through: ``x_dot = (u_l - x) / tau``,
+    ``y = [x; u_p]`` (Section IV: thrust and body torques lag, the arm's torques do not).
+
+    One Drake ``LinearSystem`` (C++) instead of a split, a ``FirstOrderLowPassFilter`` and a
+    join: the plant asks for it at every integrator stage, and each system there costs
+    framework work. Its state is the lagged output; ``x_dot`` is computed as
+    ``-x / tau + u / tau``, equal to ``(u - x) / tau`` up to rounding.
+    """
+
+    def __init__(self, time_constant: float, lagged: int, passed: int):
+        if not time_constant > 0.0:
+            raise ValueError(f"ActuatorLag: time_constant must be > 0 (s), got {time_constant}")
+        rate = 1.0 / time_constant
+        n = lagged + passed
+        B = np.zeros((lagged, n))
+        B[:, :lagged] = rate * np.eye(lagged)
+        C = np.zeros((n, lagged))
+        C[:lagged] = np.eye(lagged)
+        D = np.zeros((n, n))
+        D[lagged:, lagged:] = np.eye(passed)
+        super().__init__(-rate * np.eye(lagged), B, C, D)
+        self._time_constant = float(time_constant)
+
+    @property
+    def time_constant(self) -> float:
+        """The lag's time constant (s)."""
+        return self._time_constant
+
+    def set_initial_output_value(self, context: Context, value: np.ndarray) -> None:
+        """Start the lagged entries at ``value`` (this system's own ``context``)."""
+        context.SetContinuousState(np.asarray(value, dtype=float))
 
 
 def make_base_actuator(base_body: RigidBody) -> Propeller:

@@ -21,13 +21,11 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
 from pydrake.systems.primitives import (
-    ConstantVectorSource, Demultiplexer, FirstOrderLowPassFilter, LogVectorOutput, MatrixGain,
-    Multiplexer, Saturation, VectorLogSink)
+    AffineSystem, Demultiplexer, LogVectorOutput, MatrixGain, Saturation, VectorLogSink)
 from pydrake.multibody.plant import ExternallyAppliedSpatialForceMultiplexer
-from pydrake.systems.controllers import PidController
 
 from aerial_drake.actuators import (
-    PointWrenchApplier, free_body_wrench_map, lag_time_constant, make_base_actuator)
+    ActuatorLag, PointWrenchApplier, free_body_wrench_map, lag_time_constant, make_base_actuator)
 from aerial_drake.controller import DecoupledController, make_controller
 from aerial_drake.disturbances import add_wrench_source
 from aerial_drake.models import ROTOR_DIRECTIONS, AerialManipulator, add_to_builder, make_plant
@@ -44,7 +42,7 @@ class ClosedLoop:
     controller_model: AerialManipulator  # the controller's own rigid model
     controller: DecoupledController
     reference: ReferenceGenerator
-    lag: FirstOrderLowPassFilter | None
+    lag: ActuatorLag | None
     n_arm: int
 
 
@@ -90,31 +88,26 @@ def connect_actuation(builder: DiagramBuilder, sim: AerialManipulator, base_comm
 def _add_command_path(
         builder: DiagramBuilder, scenario: Scenario, model: AerialManipulator,
         command: OutputPort) -> tuple[OutputPort, OutputPort, OutputPort,
-                                      FirstOrderLowPassFilter | None]:
+                                      ActuatorLag | None]:
     """From the held command ``[f, mu, tau]`` to what reaches the plant: the actuator lag on
     ``[f, mu]`` (Section IV), then the saturation at ``input_limits``.
 
     Returns the base (4) and joint (n) command ports that drive the actuation, the applied
     command port (``[f, mu, tau]`` after lag and saturation) and the lag (None without).
     Each system here is evaluated at every integrator stage and adds framework work to every
-    step, so there are few: one saturation on the whole vector, and the lag's output joined
-    back to the joint torques only when there is a lag.
+    step, so there are few: one lag system that passes the joint torques through, one
+    saturation on the whole vector.
     """
     n = len(model.arm_joints)
     lag = None
     if scenario.actuation.lag_rise_time > 0:
-        split = builder.AddSystem(Demultiplexer([4, n]))
-        split.set_name("split_for_lag")
-        builder.Connect(command, split.get_input_port())
-        lag = builder.AddSystem(FirstOrderLowPassFilter(
-            lag_time_constant(scenario.actuation.lag_rise_time), 4))
+        # One C++ system for the lag on [f, mu] and the joint torques passed through: fewer
+        # systems to evaluate at each integrator stage than a split, a filter and a join.
+        lag = builder.AddSystem(ActuatorLag(
+            lag_time_constant(scenario.actuation.lag_rise_time), 4, n))
         lag.set_name("actuator_lag")
-        builder.Connect(split.get_output_port(0), lag.get_input_port())
-        lagged = builder.AddSystem(Multiplexer([4, n]))
-        lagged.set_name("lagged_command")
-        builder.Connect(lag.get_output_port(), lagged.get_input_port(0))
-        builder.Connect(split.get_output_port(1), lagged.get_input_port(1))
-        command = lagged.get_output_port()
+        builder.Connect(command, lag.get_input_port())
+        command = lag.get_output_port()
     if scenario.actuation.saturate:
         saturation = builder.AddSystem(Saturation(*input_limits(scenario, model)))
         saturation.set_name("saturation")
@@ -203,25 +196,25 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
 
 
 def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: Scenario):
-    """Holds the rotors at +-speed with Drake's PidController (damping-only: kp = ki = 0)."""
+    """Holds the rotors at +-speed with a damping drive, torque ``gain (speed - w)`` per rotor.
+
+    A Drake ``AffineSystem`` on the plant's state, ``y = D x + y0`` with ``D = -gain`` at the
+    rotors' velocities and ``y0 = gain speed``: no state of its own (a damping-only
+    ``PidController`` would carry two unused integrator states through every step).
+    """
     plant = sim.plant
-    nq, nv = plant.num_positions(), plant.num_velocities()
+    nq = plant.num_positions()
     k = len(sim.rotor_joints)
-    P = np.zeros((2 * k, nq + nv))
-    for i, joint in enumerate(sim.rotor_joints):
-        P[i, joint.position_start()] = 1.0
-        P[k + i, nq + joint.velocity_start()] = 1.0
     gain = scenario.rotors.drive_gain
-    pid = builder.AddSystem(PidController(P, np.eye(k), np.zeros(k), np.zeros(k),
-                                          np.full(k, gain)))
-    pid.set_name("rotor_drive")
     speeds = scenario.rotors.speed * np.array(ROTOR_DIRECTIONS)[:k]
-    desired = builder.AddSystem(ConstantVectorSource(np.concatenate([np.zeros(k), speeds])))
-    desired.set_name("rotor_speed")
-    builder.Connect(plant.get_state_output_port(), pid.get_input_port_estimated_state())
-    builder.Connect(desired.get_output_port(), pid.get_input_port_desired_state())
-    builder.Connect(pid.get_output_port_control(), plant.get_actuation_input_port(sim.helicopter))
-    builder.ExportOutput(pid.get_output_port_control(), "rotor_drive_torque")
+    D = np.zeros((k, plant.num_multibody_states()))
+    for i, joint in enumerate(sim.rotor_joints):
+        D[i, nq + joint.velocity_start()] = -gain
+    drive = builder.AddSystem(AffineSystem(D=D, y0=gain * speeds))
+    drive.set_name("rotor_drive")
+    builder.Connect(plant.get_state_output_port(), drive.get_input_port())
+    builder.Connect(drive.get_output_port(), plant.get_actuation_input_port(sim.helicopter))
+    builder.ExportOutput(drive.get_output_port(), "rotor_drive_torque")
 
 
 #: The closed loop's outputs logged at every sample. The references are not among them: they

@@ -157,7 +157,7 @@ def test_angular_momentum_conserved_with_rotors_spinning_and_body_tumbling():
 
 
 def test_rotor_drive_spins_the_rotors_up_to_speed():
-    """The drive of the closed loop (Drake's PidController, damping only) returns each rotor
+    """The drive of the closed loop (damping towards the speed, an AffineSystem) returns each rotor
     to its own speed, with the right sign and actuator ordering."""
     scenario = load_scenario("disturbed")
     builder = DiagramBuilder()
@@ -174,7 +174,7 @@ def test_rotor_drive_spins_the_rotors_up_to_speed():
     models.set_nominal_posture(manip, plant_context, p_WB=(0, 0, 2))
     for joint, w in zip(manip.rotor_joints, (0.98 * SPEED, -1.01 * SPEED)):
         joint.set_angular_rate(plant_context, w)
-    torque = diagram.GetSubsystemByName("rotor_drive").get_output_port_control()
+    torque = diagram.GetSubsystemByName("rotor_drive").get_output_port()
     tau0 = torque.Eval(diagram.GetSubsystemByName("rotor_drive").GetMyContextFromRoot(context))
     gain = scenario.rotors.drive_gain
     np.testing.assert_allclose(tau0, gain * SPEED * np.array([0.02, 0.01]), rtol=1e-9)
@@ -194,12 +194,13 @@ def test_lag_step_response_has_the_rise_time_of_the_scenario():
     loop = build_closed_loop(scenario)
     assert loop.lag is not None
     tau = lag_time_constant(rise)
-    np.testing.assert_allclose(loop.lag.get_time_constants_vector(), np.full(4, tau),
-                               rtol=1e-15)
+    assert loop.lag.time_constant == pytest.approx(tau, rel=1e-15)
     # The same system, alone: a unit step from rest (Drake keeps a reference only).
     lag = loop.lag
     context = lag.CreateDefaultContext()
-    lag.get_input_port().FixValue(context, np.array([1.0, 2.0, -3.0, 0.5]))
+    step = np.array([1.0, 2.0, -3.0, 0.5])
+    torques = np.linspace(-3.0, 3.0, loop.n_arm)  # the arm's torques pass through, unlagged
+    lag.get_input_port().FixValue(context, np.concatenate([step, torques]))
     lag.set_initial_output_value(context, np.zeros(4))
     simulator = Simulator(lag, context)
     simulator.get_mutable_integrator().set_target_accuracy(1e-10)
@@ -208,7 +209,9 @@ def test_lag_step_response_has_the_rise_time_of_the_scenario():
     for t in times:
         simulator.AdvanceTo(t)
         y.append(lag.get_output_port().Eval(context).copy())
-    y = np.array(y) / np.array([1.0, 2.0, -3.0, 0.5])
+    y = np.array(y)
+    np.testing.assert_array_equal(y[:, 4:], np.tile(torques, (len(times), 1)))
+    y = y[:, :4] / step
     expected = 1.0 - np.exp(-times / tau)
     np.testing.assert_allclose(y, np.column_stack([expected] * 4), atol=1e-8)
     for k in range(4):
