@@ -1,11 +1,16 @@
-"""The closed loop as one Drake Diagram (Fig. 2 of the paper).
+"""The closed loop of Fig. 2 of the paper in Drake's systems framework.
 
 :func:`build_closed_loop` wires the simulated plant and its SceneGraph, the reference generator,
 the controller (on its own rigid-body model of the plant, holding its samples), the actuator lag
-and saturation, the rotor drive, and two exported disturbance input ports. The disturbance
-sources and loggers are added around it by :func:`build_simulation`.
+and saturation, the rotor drive, and two exported disturbance input ports, as one Diagram.
+:func:`build_simulation` adds the same systems straight into the simulation's builder, with the
+disturbance sources and loggers around them: not nested in a Diagram of their own, because
+each level of nesting costs framework work at every integrator stage (the continuous state
+is a vector of vectors, and every access goes through each level; about 6 % of a step,
+callgrind), while the two diagrams compute the same doubles.
 
-Exported ports of the closed-loop diagram:
+Ports of the closed loop (the Diagram's exported ports, or :meth:`ClosedLoop.input_port` and
+:meth:`ClosedLoop.output_port` either way):
 
 - inputs ``helicopter_wrench`` and ``end_effector_wrench``: ``[torque; force]`` in World (6).
 - outputs ``plant_state``, ``command`` (what the controller asks for, held between samples),
@@ -16,10 +21,11 @@ Exported ports of the closed-loop diagram:
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
+from dataclasses import dataclass, field
 
 import numpy as np
-from pydrake.systems.framework import Diagram, DiagramBuilder, OutputPort
+from pydrake.systems.framework import Diagram, DiagramBuilder, InputPort, OutputPort
 from pydrake.systems.primitives import (
     AffineSystem, Demultiplexer, LogVectorOutput, MatrixGain, Saturation, VectorLogSink)
 from pydrake.multibody.plant import ExternallyAppliedSpatialForceMultiplexer
@@ -35,15 +41,40 @@ from aerial_drake.scenarios import Scenario
 
 @dataclass
 class ClosedLoop:
-    """The closed-loop diagram and handles into it."""
+    """The closed loop's systems and its ports by name.
 
-    diagram: Diagram
-    simulated_plant: AerialManipulator  # the simulated plant (inside ``diagram``)
+    ``diagram`` is the closed loop as a Diagram of its own (:func:`build_closed_loop`), or None
+    where its systems were added straight into a larger builder (:func:`build_simulation`).
+    """
+
+    diagram: Diagram | None
+    simulated_plant: AerialManipulator  # the simulated plant
     controller_model: AerialManipulator  # the controller's own rigid model
     controller: DecoupledController
     reference: ReferenceGenerator
     lag: ActuatorLag | None
     n_arm: int
+    inputs: dict[str, InputPort] = field(default_factory=dict)
+    outputs: dict[str, OutputPort] = field(default_factory=dict)
+
+    def input_port(self, name: str) -> InputPort:
+        """The closed loop's input port ``name`` (``helicopter_wrench``, ...)."""
+        return _port(self.inputs, name, "input")
+
+    def output_port(self, name: str) -> OutputPort:
+        """The closed loop's output port ``name`` (``plant_state``, ``command``, ...)."""
+        return _port(self.outputs, name, "output")
+
+    def has_output_port(self, name: str) -> bool:
+        return name in self.outputs
+
+
+def _port(ports: dict, name: str, kind: str):
+    try:
+        return ports[name]
+    except KeyError:
+        raise KeyError(f"the closed loop has no {kind} port {name!r}; it has "
+                       f"{sorted(ports)}") from None
 
 
 def input_limits(scenario: Scenario, model: AerialManipulator,
@@ -128,6 +159,24 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
     the reference and the logging but no control law.
     """
     builder = DiagramBuilder()
+    loop = add_closed_loop(builder, scenario, zero_controller=zero_controller)
+    for port_name, port in loop.inputs.items():
+        builder.ExportInput(port, port_name)
+    for port_name, port in loop.outputs.items():
+        builder.ExportOutput(port, port_name)
+    diagram = builder.Build()
+    diagram.set_name(name)
+    return dataclasses.replace(
+        loop, diagram=diagram,
+        inputs={k: diagram.GetInputPort(k) for k in loop.inputs},
+        outputs={k: diagram.GetOutputPort(k) for k in loop.outputs})
+
+
+def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
+                    zero_controller: bool = False) -> ClosedLoop:
+    """Add the systems of the closed loop of ``scenario`` to ``builder`` (its disturbance
+    inputs left to connect); the returned :class:`ClosedLoop` names its ports."""
+    inputs, outputs = {}, {}
     sim = add_to_builder(builder, scenario.plant_variant, time_step=0.0)
     plant = sim.plant
     plant.set_name("plant")
@@ -144,7 +193,7 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
     controller.set_name("controller")
     for port in ("com_reference", "task_reference", "heading_reference"):
         builder.Connect(reference.GetOutputPort(port), controller.GetInputPort(port))
-        builder.ExportOutput(reference.GetOutputPort(port), port)
+        outputs[port] = reference.GetOutputPort(port)
 
     state_out = plant.get_state_output_port()
     if scenario.plant_variant == "rigid":
@@ -158,11 +207,11 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
         builder.Connect(selector.get_output_port(), controller.get_state_input_port())
 
     command = controller.get_command_output_port()
-    builder.ExportOutput(command, "command")
-    builder.ExportOutput(controller.get_diagnostics_output_port(), "diagnostics")
+    outputs["command"] = command
+    outputs["diagnostics"] = controller.get_diagnostics_output_port()
 
     base_cmd, joint_cmd, applied, lag = _add_command_path(builder, scenario, model, command)
-    builder.ExportOutput(applied, "applied_command")
+    outputs["applied_command"] = applied
 
     # (2): thrust along body z and body torques, at the helicopter frame; joint torques.
     base_forces = connect_actuation(builder, sim, base_cmd, joint_cmd)
@@ -181,22 +230,23 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
     builder.Connect(base_forces, forces.get_input_port(0))
     builder.Connect(ee_wrench.get_output_port(), forces.get_input_port(1))
     builder.Connect(forces.get_output_port(), plant.get_applied_spatial_force_input_port())
-    builder.ExportInput(to_generalized.get_input_port(), "helicopter_wrench")
-    builder.ExportInput(ee_wrench.get_input_port(), "end_effector_wrench")
+    inputs["helicopter_wrench"] = to_generalized.get_input_port()
+    inputs["end_effector_wrench"] = ee_wrench.get_input_port()
 
     if sim.rotor_joints:
-        _add_rotor_drive(builder, sim, scenario)
+        outputs["rotor_drive_torque"] = _add_rotor_drive(builder, sim, scenario)
 
-    builder.ExportOutput(state_out, "plant_state")
-    builder.ExportOutput(sim.scene_graph.get_query_output_port(), "query_object")
-    diagram = builder.Build()
-    diagram.set_name(name)
-    return ClosedLoop(diagram=diagram, simulated_plant=sim, controller_model=model,
-                      controller=controller, reference=reference, lag=lag, n_arm=n)
+    outputs["plant_state"] = state_out
+    outputs["query_object"] = sim.scene_graph.get_query_output_port()
+    return ClosedLoop(diagram=None, simulated_plant=sim, controller_model=model,
+                      controller=controller, reference=reference, lag=lag, n_arm=n,
+                      inputs=inputs, outputs=outputs)
 
 
-def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: Scenario):
-    """Holds the rotors at +-speed with a damping drive, torque ``gain (speed - w)`` per rotor.
+def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: Scenario,
+                     ) -> OutputPort:
+    """Holds the rotors at +-speed with a damping drive, torque ``gain (speed - w)`` per rotor;
+    returns the drive's torque output.
 
     A Drake ``AffineSystem`` on the plant's state, ``y = D x + y0`` with ``D = -gain`` at the
     rotors' velocities and ``y0 = gain speed``: no state of its own (a damping-only
@@ -214,7 +264,7 @@ def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: 
     drive.set_name("rotor_drive")
     builder.Connect(plant.get_state_output_port(), drive.get_input_port())
     builder.Connect(drive.get_output_port(), plant.get_actuation_input_port(sim.helicopter))
-    builder.ExportOutput(drive.get_output_port(), "rotor_drive_torque")
+    return drive.get_output_port()
 
 
 #: The closed loop's outputs logged at every sample. The references are not among them: they
@@ -227,23 +277,22 @@ LOGGED_PORTS = ("plant_state", "command", "applied_command", "diagnostics", "rot
 def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = None,
                      zero_controller: bool = False,
                      ) -> tuple[DiagramBuilder, ClosedLoop, dict[str, VectorLogSink]]:
-    """Add the closed loop, the scenario's disturbance sources and loggers to ``builder``.
+    """Add the closed loop's systems (:func:`add_closed_loop`, not nested in a Diagram of
+    their own), the scenario's disturbance sources and loggers to ``builder``.
 
-    Returns the builder (not yet built, so callers can add a visualiser), the closed loop and
-    the loggers by port name.
+    Returns the builder (not yet built, so callers can add a visualiser), the closed loop
+    (``diagram`` None; its ports by name) and the loggers by port name.
     """
     builder = builder or DiagramBuilder()
-    loop = build_closed_loop(scenario, zero_controller=zero_controller)
-    builder.AddSystem(loop.diagram)
+    loop = add_closed_loop(builder, scenario, zero_controller=zero_controller)
     for target, port in (("helicopter", "helicopter_wrench"),
                          ("end_effector", "end_effector_wrench")):
         source = add_wrench_source(builder, scenario.disturbances, target)
-        builder.Connect(source.get_output_port(), loop.diagram.GetInputPort(port))
+        builder.Connect(source.get_output_port(), loop.input_port(port))
     loggers = {}
     for port in LOGGED_PORTS:
-        if loop.diagram.HasOutputPort(port):
-            logger = LogVectorOutput(loop.diagram.GetOutputPort(port), builder,
-                                     scenario.log_period)
+        if loop.has_output_port(port):
+            logger = LogVectorOutput(loop.output_port(port), builder, scenario.log_period)
             logger.set_name(f"log_{port}")
             loggers[port] = logger
     return builder, loop, loggers

@@ -372,7 +372,6 @@ class MeshcatView:
     def configure(self, builder: DiagramBuilder, loop: ClosedLoop) -> None:
         """Add the visualizer and the overlay to ``builder`` (before Build), frame the camera
         and start recording."""
-        diagram = loop.diagram
         params = MeshcatVisualizerParams()
         params.role = Role.kIllustration
         params.publish_period = self.publish_period
@@ -380,16 +379,17 @@ class MeshcatView:
         params.enable_alpha_slider = True
         params.initial_alpha_slider_value = ROBOT_ALPHA
         self.visualizer = MeshcatVisualizer.AddToBuilder(
-            builder, diagram.GetOutputPort("query_object"), self.meshcat, params)
+            builder, loop.output_port("query_object"), self.meshcat, params)
         overlay = builder.AddSystem(TrackingOverlay(
             self.meshcat, self.scenario, loop.simulated_plant, publish_period=self.publish_period))
         overlay.set_name("meshcat_overlay")
         for port in ("plant_state", "com_reference", "task_reference", "heading_reference"):
-            builder.Connect(diagram.GetOutputPort(port), overlay.GetInputPort(port))
+            builder.Connect(loop.output_port(port), overlay.GetInputPort(port))
         # The disturbance sources are whatever drives the closed loop's wrench inputs.
         sources = builder.connection_map()
         for port in ("helicopter_wrench", "end_effector_wrench"):
-            system, index = sources[(diagram, diagram.GetInputPort(port).get_index())]
+            wrench_input = loop.input_port(port)
+            system, index = sources[(wrench_input.get_system(), wrench_input.get_index())]
             builder.Connect(system.get_output_port(index), overlay.GetInputPort(port))
         self.overlay = overlay
         self.meshcat.SetCameraPose(*camera_for(self.scenario))

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from _common import write_graphviz
 
+from aerial_drake.diagram import build_closed_loop
 from aerial_drake.runner import run_scenario
 from aerial_drake.scenarios import load_scenario
 
@@ -24,13 +25,14 @@ def main() -> None:
     scenario = load_scenario(args.scenario, overrides={"duration": args.duration})
     out = Path(args.out)
 
-    def draw(builder, loop):
-        # Depth 1: the closed loop's blocks (plant, reference, controller, hold, saturation,
-        # actuators), drawn from the diagram that then runs.
-        for path in write_graphviz(loop.diagram, out / f"{scenario.name}_closed_loop"):
-            print(f"wrote {path}")
+    # Depth 1: the closed loop's blocks (plant, reference, controller, lag, saturation,
+    # actuators) as a Diagram of their own; the run below adds the same systems straight into
+    # the simulation's diagram (aerial_drake.diagram.build_simulation).
+    for path in write_graphviz(build_closed_loop(scenario).diagram,
+                               out / f"{scenario.name}_closed_loop"):
+        print(f"wrote {path}")
 
-    result = run_scenario(scenario, out_dir=out / scenario.name, configure=draw)
+    result = run_scenario(scenario, out_dir=out / scenario.name)
     print(f"ran {result.metrics['simulated_time_s']:.2f} s; logs in {result.out_dir}")
 
 
