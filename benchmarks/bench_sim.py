@@ -83,8 +83,11 @@ def main() -> None:
               f"{'zero-ctrl wall':>15} {'ratio':>6} {'peak RSS (MB)':>14}")
     print(header)
     for name in args.scenarios:
-        full = [run_worker(name, args.duration, False) for _ in range(args.repeats)]
-        zero = [run_worker(name, args.duration, True) for _ in range(args.repeats)]
+        # Alternating, so that both medians see the same drift of the machine's speed.
+        full, zero = [], []
+        for _ in range(args.repeats):
+            full.append(run_worker(name, args.duration, False))
+            zero.append(run_worker(name, args.duration, True))
         wall = statistics.median(r["wall_s"] for r in full)
         zwall = statistics.median(r["wall_s"] for r in zero)
         print(f"{name:>10} {wall:9.2f} {args.duration / wall:10.2f} "
