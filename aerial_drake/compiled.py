@@ -6,7 +6,16 @@ The reference implementation is the numpy code of :mod:`aerial_drake.decoupling`
 same quantities, with the same formulas in the same order, but from its own forward kinematics
 (:class:`~aerial_drake.kinematic_tree.KinematicTree`), in compiled loops over small fixed-size
 arrays: one evaluation of the law costs tens of microseconds instead of about two milliseconds
-of numpy calls on 3- to 13-element arrays. See ``docs/performance.md``.
+of numpy calls on 3- to 13-element arrays. See ``docs/performance.md``. (One quantity takes
+another route to the same value: sigma_min(J3) of Assumption 1, from the smallest eigenvalue of
+J3^T J3 as there, by :func:`_min_eigenvalue_sym`.)
+
+An evaluation of the law allocates nothing. :class:`CompiledLaw` packs the tree, the
+end-effector frame, the gains and the limits into one float and one integer array at
+construction and keeps one float workspace, which the kernels see as named views (the
+``_*Buffers`` tuples); so a call hands numba nine arrays to unbox (it unboxes each argument of
+every call) and none to allocate or free. The law applies Lambda, Gamma and T^-1 to vectors
+only, through the columns of T^-1 that the vectors' nonzero entries meet.
 
 The only entry points are :class:`CompiledLaw` and :func:`decompose`; the kernels are private.
 numba compiles them on first use and caches the machine code next to this file (``cache=True``),
@@ -19,9 +28,14 @@ from __future__ import annotations
 import math
 import os
 import sys
+from collections import namedtuple
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.core import cgutils
+from numba.core.imputils import impl_ret_borrowed
+from numba.extending import intrinsic
+from numba.np.arrayobj import make_array, populate_array
 
 from aerial_drake.control import DIAGNOSTICS_SIZE
 from aerial_drake.kinematic_tree import FREE, REVOLUTE, KinematicTree
@@ -32,62 +46,222 @@ from aerial_drake.reference import (
 # error_model="numpy": a division by zero gives inf/nan as in the numpy path (and the checks
 # of Assumptions 1 and 2 report it) instead of raising ZeroDivisionError mid-law.
 _jit = njit(cache=True, nogil=True, error_model="numpy")
+# For the few-line kernels called in inner loops: a call passes each array as its whole
+# descriptor, which costs more than these kernels' own work; numba inlines them instead.
+_inline = njit(cache=True, nogil=True, error_model="numpy", inline="always")
 
 #: Status codes of the law kernel.
 OK, ASSUMPTION_2, ASSUMPTION_1, NONFINITE = 0, 1, 2, 3
 
 
+# --- flat storage: packed inputs and the workspace, as views ---------------------------------
+
+@intrinsic
+def _view(typingctx, buf, at, shape):
+    """``buf[at:at + prod(shape)]`` of a flat C-contiguous ``buf`` as a C-contiguous array of
+    ``shape`` (a tuple of integers), unchecked and not reference-counted.
+
+    A slice or ``reshape`` would cost tens of nanoseconds for each of the hundred or so views
+    of a call, and more for each view taken of them in a loop: numba's ``reshape`` checks the
+    shape through a C helper, and each view holds a reference to ``buf``'s memory, taken and
+    released by atomic operations in a function call. This view and the views taken of it
+    carry no reference (as numba's ``carray`` of a pointer), so they are valid while ``buf``
+    is, which the kernels' callers guarantee (they keep the packed arrays and the workspace
+    for the call); they must not outlive the call. The caller also checks that the views fit
+    (see :func:`_law`)."""
+    if not (isinstance(buf, types.Array) and buf.ndim == 1 and buf.layout == "C"
+            and isinstance(at, types.Integer) and isinstance(shape, types.BaseTuple)
+            and all(isinstance(d, types.Integer) for d in shape)):
+        return None
+
+    def codegen(context, builder, sig, args):
+        src = make_array(sig.args[0])(context, builder, args[0])
+        dims = [context.cast(builder, d, t, types.intp)
+                for d, t in zip(cgutils.unpack_tuple(builder, args[2]), sig.args[2])]
+        strides, stride = [], src.itemsize
+        for d in reversed(dims):  # C order: the last index contiguous
+            strides.insert(0, stride)
+            stride = builder.mul(stride, d)
+        start = context.cast(builder, args[1], sig.args[1], types.intp)
+        view = make_array(sig.return_type)(context, builder)
+        populate_array(view, data=builder.gep(src.data, [start]), shape=dims, strides=strides,
+                       itemsize=src.itemsize, meminfo=None)
+        return impl_ret_borrowed(context, builder, sig.return_type, view._getvalue())
+
+    return types.Array(buf.dtype, len(shape), "C")(buf, at, shape), codegen
+
+
+@_jit
+def _vec(buf, at, size):
+    """The ``size`` entries of the flat ``buf`` from offset ``at`` (a :func:`_view`), and the
+    offset after them."""
+    return _view(buf, at, (size,)), at + size
+
+
+@_jit
+def _mat(buf, at, rows, cols):
+    """As :func:`_vec`, a rows x cols matrix."""
+    return _view(buf, at, (rows, cols)), at + rows * cols
+
+
+@_jit
+def _mats(buf, at, count, rows, cols):
+    """As :func:`_vec`, ``count`` rows x cols matrices."""
+    return _view(buf, at, (count, rows, cols)), at + count * rows * cols
+
+
+#: The arrays of :class:`KinematicTree` (parents before children), and each body's Jacobian
+#: columns: ``cols[b, :num_cols[b]]``, the velocities of its ancestors' joints from the body up,
+#: all below ``width[b]``; ``span[b, c]``, the range of ``cols[b, c:num_cols[b]]``.
+_Tree = namedtuple("_Tree", "parent joint_type q_start v_start num_cols cols width span R_PF "
+                            "p_PF R_MC p_MC axis_F inertia mass com_B reflected")
+
+
+def _pack_tree(tree: KinematicTree) -> tuple[np.ndarray, np.ndarray]:
+    """The tree as one float and one integer array, in the order :func:`_unpack_tree` reads."""
+    nb, nv = tree.parent.size, tree.reflected_inertia.size
+    widths = {FREE: 6, REVOLUTE: 1}
+    num_cols, cols = np.zeros(nb, dtype=np.int64), np.zeros((nb, nv), dtype=np.int64)
+    for b in range(nb):
+        a = b
+        while a >= 0:
+            for j in range(widths.get(int(tree.joint_type[a]), 0)):
+                cols[b, num_cols[b]] = tree.v_start[a] + j
+                num_cols[b] += 1
+            a = tree.parent[a]
+    width = np.array([cols[b, :num_cols[b]].max(initial=-1) + 1 for b in range(nb)])
+    span = np.zeros((nb, nv, 2), dtype=np.int64)
+    for b in range(nb):
+        for c in range(num_cols[b]):
+            span[b, c] = cols[b, c:num_cols[b]].min(), cols[b, c:num_cols[b]].max() + 1
+    ints = np.concatenate([[nb, nv], tree.parent, tree.joint_type, tree.q_start, tree.v_start,
+                           num_cols, cols.ravel(), width, span.ravel()]).astype(np.int64)
+    floats = np.concatenate([np.ravel(a) for a in (
+        tree.R_PF, tree.p_PF, tree.R_MC, tree.p_MC, tree.axis_F, tree.spatial_inertia,
+        tree.mass, tree.com_B, tree.reflected_inertia)]).astype(float)
+    return floats, ints
+
+
+@_jit
+def _unpack_tree(model, index):
+    """The tree packed by :func:`_pack_tree` at the start of ``model`` and ``index``, as views,
+    and the offsets after it in each."""
+    nb, nv = index[0], index[1]
+    parent, k = _vec(index, 2, nb)
+    joint_type, k = _vec(index, k, nb)
+    q_start, k = _vec(index, k, nb)
+    v_start, k = _vec(index, k, nb)
+    num_cols, k = _vec(index, k, nb)
+    cols, k = _mat(index, k, nb, nv)
+    width, k = _vec(index, k, nb)
+    span, k = _mats(index, k, nb, nv, 2)
+    R_PF, at = _mats(model, 0, nb, 3, 3)
+    p_PF, at = _mat(model, at, nb, 3)
+    R_MC, at = _mats(model, at, nb, 3, 3)
+    p_MC, at = _mat(model, at, nb, 3)
+    axis_F, at = _mat(model, at, nb, 3)
+    inertia, at = _mats(model, at, nb, 6, 6)
+    mass, at = _vec(model, at, nb)
+    com_B, at = _mat(model, at, nb, 3)
+    reflected, at = _vec(model, at, nv)
+    return (_Tree(parent, joint_type, q_start, v_start, num_cols, cols, width, span, R_PF, p_PF,
+                  R_MC, p_MC, axis_F, inertia, mass, com_B, reflected), at, k)
+
+
+#: Section II's quantities and scratch space (see :func:`_section2_buffers`).
+_SectionII = namedtuple("_SectionII", "R_all p_all axis_W origin_W frames J J_dot M C M_dot J_g "
+                                      "J_g_dot p_WG V A products T T_dot T_inv T_LU Z "
+                                      "ZZ")
+
+
+@_jit
+def _section2_buffers(work, at, nb, nv):
+    """Section II's buffers in ``work`` from offset ``at``, and the offset after them."""
+    n = nv - 6
+    R_all, at = _mats(work, at, nb, 3, 3)
+    p_all, at = _mat(work, at, nb, 3)
+    axis_W, at = _mat(work, at, nb, 3)  # joint axis in World
+    origin_W, at = _mat(work, at, nb, 3)  # joint frame M's origin in World
+    frames, at = _mats(work, at, 4, 3, 3)  # R_WF, R_FM, R_WM and (row 0 of the last) p_WF
+    # The body Jacobians and their derivatives are written at each body's Jacobian columns
+    # only: zero elsewhere from the workspace's allocation, as the tree fixes those columns.
+    J, at = _mats(work, at, nb, 6, nv)
+    J_dot, at = _mats(work, at, nb, 6, nv)
+    M, at = _mat(work, at, nv, nv)
+    C, at = _mat(work, at, nv, nv)
+    M_dot, at = _mat(work, at, nv, nv)
+    J_g, at = _mat(work, at, 3, nv)
+    J_g_dot, at = _mat(work, at, 3, nv)
+    p_WG, at = _vec(work, at, 3)
+    V, at = _mat(work, at, 2, 6)  # a body's spatial velocity and a 6-vector of scratch
+    A, at = _mat(work, at, 6, 6)
+    # I J and the Coriolis product I J_dot + A J / 2 of a body, then rows of J^T times them
+    products, at = _mats(work, at, 3, 6, nv)
+    T, at = _mat(work, at, nv, nv)
+    T_dot, at = _mat(work, at, nv, nv)
+    T_inv, at = _mat(work, at, nv, nv)
+    T_LU, at = _mat(work, at, nv, nv)
+    Z, at = _mats(work, at, 3, n, nv)  # Z M, Z_dot M, Z M_dot
+    ZZ, at = _mats(work, at, 5, n, n)  # Z M Z^T, its factorisation and three products
+    return (_SectionII(R_all, p_all, axis_W, origin_W, frames, J, J_dot, M, C, M_dot, J_g,
+                       J_g_dot, p_WG, V, A, products, T, T_dot, T_inv, T_LU, Z, ZZ),
+            at)
+
+
 # --- small dense linear algebra (explicit loops: no BLAS/LAPACK, hence no SciPy) -------------
 
 @_jit
-def _mm(A, B):
+def _mm_into(A, B, out):
+    """out = A B (zero entries of A skipped)."""
     n, k, m = A.shape[0], A.shape[1], B.shape[1]
-    out = np.zeros((n, m))
     for i in range(n):
+        for j in range(m):
+            out[i, j] = 0.0
         for p in range(k):
             a = A[i, p]
             if a != 0.0:
                 for j in range(m):
                     out[i, j] += a * B[p, j]
-    return out
 
 
 @_jit
-def _mtm(A, B):
-    """A^T B."""
-    return _mm(A.T, B)
+def _mtm_into(A, B, out):
+    """out = A^T B."""
+    _mm_into(A.T, B, out)
 
 
 @_jit
-def _mv(A, x):
-    """A x, two rows at a time: two independent sums in flight instead of one (the same sums,
-    in the same order)."""
-    n, k = A.shape
-    out = np.empty(n)
-    for i in range(0, n - 1, 2):
-        s0, s1 = 0.0, 0.0
+def _mv_into(A, x, out, first=0):
+    """out = A[:, first:first + len(x)] x, four rows at a time: four independent sums in
+    flight instead of one (the same sums, in the same order)."""
+    n, k = A.shape[0], x.shape[0]
+    i = 0
+    while i + 4 <= n:
+        s0, s1, s2, s3 = 0.0, 0.0, 0.0, 0.0
         for p in range(k):
-            s0 += A[i, p] * x[p]
-            s1 += A[i + 1, p] * x[p]
-        out[i], out[i + 1] = s0, s1
-    if n % 2:
+            s0 += A[i, first + p] * x[p]
+            s1 += A[i + 1, first + p] * x[p]
+            s2 += A[i + 2, first + p] * x[p]
+            s3 += A[i + 3, first + p] * x[p]
+        out[i], out[i + 1], out[i + 2], out[i + 3] = s0, s1, s2, s3
+        i += 4
+    for r in range(i, n):
         s0 = 0.0
         for p in range(k):
-            s0 += A[n - 1, p] * x[p]
-        out[n - 1] = s0
-    return out
+            s0 += A[r, first + p] * x[p]
+        out[r] = s0
 
 
 @_jit
-def _mtv(A, x):
-    """A^T x."""
-    k, n = A.shape
-    out = np.zeros(n)
+def _mtv_into(A, x, out, first=0):
+    """out = A[:len(x), first:first + len(out)]^T x."""
+    k, n = x.shape[0], out.shape[0]
+    for i in range(n):
+        out[i] = 0.0
     for p in range(k):
         a = x[p]
         for i in range(n):
-            out[i] += A[p, i] * a
-    return out
+            out[i] += A[p, first + i] * a
 
 
 @_jit
@@ -99,136 +273,199 @@ def _dot(a, b):
 
 
 @_jit
-def _cross(a, b):
-    out = np.empty(3)
-    out[0] = a[1] * b[2] - a[2] * b[1]
-    out[1] = a[2] * b[0] - a[0] * b[2]
-    out[2] = a[0] * b[1] - a[1] * b[0]
-    return out
+def _norm(a):
+    return math.sqrt(_dot(a, a))
+
+
+@_inline
+def _cross_at(a, b, i):
+    """Entry i of a x b."""
+    j, k = (i + 1) % 3, (i + 2) % 3
+    return a[j] * b[k] - a[k] * b[j]
 
 
 @_jit
-def _hat(a):
-    out = np.zeros((3, 3))
+def _cross_into(a, b, out):
+    for i in range(3):
+        out[i] = _cross_at(a, b, i)
+
+
+@_jit
+def _hat_into(a, out):
+    out[0, 0], out[1, 1], out[2, 2] = 0.0, 0.0, 0.0
     out[0, 1], out[0, 2] = -a[2], a[1]
     out[1, 0], out[1, 2] = a[2], -a[0]
     out[2, 0], out[2, 1] = -a[1], a[0]
-    return out
 
 
 @_jit
-def _vee(S):
+def _vee_into(S, out):
     """vee of the skew-symmetric part, as decoupling.vee."""
-    out = np.empty(3)
     out[0] = 0.5 * (S[2, 1] - S[1, 2])
     out[1] = 0.5 * (S[0, 2] - S[2, 0])
     out[2] = 0.5 * (S[1, 0] - S[0, 1])
-    return out
+
+
+@_inline
+def _zero(A):
+    """A = 0 for a matrix (a loop the compiler unrolls or vectorizes, where numba's A[:, :] = 0
+    calls memset row by row)."""
+    for i in range(A.shape[0]):
+        for j in range(A.shape[1]):
+            A[i, j] = 0.0
 
 
 @_jit
-def _lu(A):
-    """LU factorisation with partial pivoting: (LU packed, pivot rows)."""
-    n = A.shape[0]
-    LU = A.copy()
-    piv = np.arange(n)
+def _set_identity(A):
+    for i in range(A.shape[0]):
+        for j in range(A.shape[1]):
+            A[i, j] = 1.0 if i == j else 0.0
+
+
+@_jit
+def _solve_into(A, B):
+    """B <- A^-1 B by Gaussian elimination with partial pivoting, overwriting A: the operations
+    of an LU factorisation and of its two triangular solves, in their order (the rows of B
+    follow the pivoting as they go, so no permutation is kept)."""
+    n, m = B.shape
     for k in range(n):
         p = k
-        big = abs(LU[k, k])
+        big = abs(A[k, k])
         for i in range(k + 1, n):
-            if abs(LU[i, k]) > big:
-                big, p = abs(LU[i, k]), i
+            if abs(A[i, k]) > big:
+                big, p = abs(A[i, k]), i
         if p != k:
-            for j in range(n):
-                LU[k, j], LU[p, j] = LU[p, j], LU[k, j]
-            piv[k], piv[p] = piv[p], piv[k]
-        d = LU[k, k]
+            for j in range(k, n):
+                A[k, j], A[p, j] = A[p, j], A[k, j]
+            for j in range(m):
+                B[k, j], B[p, j] = B[p, j], B[k, j]
+        d = A[k, k]
+        for i in range(k + 1, n):  # the multipliers first: their divisions overlap
+            A[i, k] /= d
         for i in range(k + 1, n):
-            LU[i, k] /= d
-            f = LU[i, k]
+            f = A[i, k]
             if f != 0.0:
                 for j in range(k + 1, n):
-                    LU[i, j] -= f * LU[k, j]
-    return LU, piv
-
-
-@_jit
-def _lu_solve(LU, piv, B):
-    """A^{-1} B from _lu(A), B of shape (n, m)."""
-    n, m = B.shape
-    X = np.empty((n, m))
-    for i in range(n):
-        X[i] = B[piv[i]]
-    for i in range(n):
-        for k in range(i):
-            f = LU[i, k]
-            if f != 0.0:
+                    A[i, j] -= f * A[k, j]
                 for j in range(m):
-                    X[i, j] -= f * X[k, j]
+                    B[i, j] -= f * B[k, j]
     for i in range(n - 1, -1, -1):
         for k in range(i + 1, n):
-            f = LU[i, k]
+            f = A[i, k]
             if f != 0.0:
                 for j in range(m):
-                    X[i, j] -= f * X[k, j]
-        d = LU[i, i]
+                    B[i, j] -= f * B[k, j]
+        d = A[i, i]
         for j in range(m):
-            X[i, j] /= d
-    return X
+            B[i, j] /= d
 
 
 @_jit
-def _inv(A):
-    LU, piv = _lu(A)
-    return _lu_solve(LU, piv, np.eye(A.shape[0]))
+def _inv_into(A, work, out):
+    """out = A^-1 (``work``: scratch of A's shape)."""
+    work[:, :] = A
+    _set_identity(out)
+    _solve_into(work, out)
 
 
 @_jit
-def _rotate_pair(A, i, j, k, l, c, s):
-    g, h = A[i, j], A[k, l]
-    A[i, j] = c * g - s * h
-    A[k, l] = s * g + c * h
-
-
-@_jit
-def _min_eigenvalue_sym(S):
-    """Smallest eigenvalue of a symmetric matrix (cyclic Jacobi; high relative accuracy)."""
-    A = S.copy()
+def _tridiagonalize(A, d, e, u, p):
+    """Householder reduction of the symmetric A (overwritten; its lower triangle is read) to the
+    tridiagonal matrix of the same eigenvalues with diagonal ``d`` and off-diagonal ``e``.
+    ``u``, ``p``: vectors of A's size, scratch."""
     n = A.shape[0]
-    for _ in range(100):
-        off = 0.0
-        for i in range(n):
+    for k in range(n - 2):
+        sq = 0.0
+        for i in range(k + 1, n):
+            sq += A[i, k] * A[i, k]
+        d[k] = A[k, k]
+        if sq == 0.0:
+            e[k] = 0.0
+            continue
+        x0 = A[k + 1, k]
+        alpha = -math.sqrt(sq) if x0 >= 0.0 else math.sqrt(sq)  # no cancellation in x0 - alpha
+        e[k] = alpha
+        # H = E - beta u u^T, u = x - alpha e_1, maps x = A[k+1:, k] to alpha e_1; the trailing
+        # block B = A[k+1:, k+1:] becomes H B H = B - u q^T - q u^T with p = beta B u and
+        # q = p - (beta / 2) (u . p) u.
+        u[k + 1] = x0 - alpha
+        for i in range(k + 2, n):
+            u[i] = A[i, k]
+        beta = 1.0 / (sq - alpha * x0)  # 2 / (u . u)
+        up = 0.0
+        for i in range(k + 1, n):
+            t = 0.0
+            for j in range(k + 1, i + 1):
+                t += A[i, j] * u[j]
             for j in range(i + 1, n):
-                off += A[i, j] * A[i, j]  # upper triangle
-        scale = 0.0
-        for i in range(n):
-            scale += A[i, i] * A[i, i]
-        if off <= 1e-36 * scale:
+                t += A[j, i] * u[j]
+            p[i] = beta * t
+            up += u[i] * p[i]
+        h = 0.5 * beta * up
+        for i in range(k + 1, n):
+            p[i] -= h * u[i]
+        for i in range(k + 1, n):
+            for j in range(k + 1, i + 1):
+                A[i, j] -= u[i] * p[j] + p[i] * u[j]
+    d[n - 2], d[n - 1] = A[n - 2, n - 2], A[n - 1, n - 1]
+    e[n - 2] = A[n - 1, n - 2]
+
+
+@_jit
+def _newton_step(d, e, x):
+    """-c(x) / c'(x) for c(x) = det(T - x E) of the tridiagonal T (diagonal d, off-diagonal e),
+    by the three-term recurrence of its leading minors."""
+    c0, c1 = 1.0, d[0] - x
+    g0, g1 = 0.0, -1.0  # their derivatives
+    for k in range(1, d.shape[0]):
+        b2 = e[k - 1] * e[k - 1]
+        c0, c1 = c1, (d[k] - x) * c1 - b2 * c0
+        g0, g1 = g1, (d[k] - x) * g1 - c0 - b2 * g0
+    return -c1 / g1
+
+
+@_jit
+def _has_eigenvalue_below(d, e, x):
+    """Whether the tridiagonal T has an eigenvalue below x (Sylvester: a negative pivot of the
+    LDL^T factorisation of T - x E; a zero pivot counts as an eigenvalue at x)."""
+    pivot = d[0] - x
+    for k in range(1, d.shape[0]):
+        if not pivot > 0.0:
+            return True
+        pivot = (d[k] - x) - e[k - 1] * e[k - 1] / pivot
+    return not pivot > 0.0
+
+
+@_jit
+def _min_eigenvalue_sym(S, work):
+    """Smallest eigenvalue of a symmetric matrix (overwritten), nan if S is not finite.
+
+    Householder reduction to a tridiagonal matrix, then Newton's method on its characteristic
+    polynomial from below the smallest eigenvalue: for a polynomial whose roots are all real,
+    the iterates then increase monotonically to the smallest root, quadratically once it is
+    simple. Each iteration is a short recurrence, so this costs a fraction of a Jacobi
+    solver's sweeps of rotations (square roots and divisions in sequence), with the same
+    accuracy: a few units of rounding times the norm of S. ``work``: four vectors of S's size.
+    """
+    n = S.shape[0]
+    for i in range(n):
+        for j in range(n):
+            if not math.isfinite(S[i, j]):
+                return math.nan
+    d, e = work[0], work[1]
+    _tridiagonalize(S, d, e, work[2], work[3])
+    # Start at 0 for a positive semi-definite S (as J3^T J3), else at Gershgorin's bound.
+    x = 0.0
+    if n > 1 and _has_eigenvalue_below(d, e, 0.0):
+        x = min(d[0] - abs(e[0]), d[n - 1] - abs(e[n - 2]))
+        for k in range(1, n - 1):
+            x = min(x, d[k] - abs(e[k - 1]) - abs(e[k]))
+    for _ in range(100):  # (a few iterations; the bound only guards against a double root)
+        x_next = x + _newton_step(d, e, x)
+        if not x_next > x:  # converged, to rounding (or at the root)
             break
-        for p in range(n):
-            for q in range(p + 1, n):
-                apq = A[p, q]
-                if apq == 0.0:
-                    continue
-                theta = (A[q, q] - A[p, p]) / (2.0 * apq)
-                t = (1.0 if theta >= 0.0 else -1.0) / (abs(theta) + math.sqrt(theta * theta + 1.0))
-                c = 1.0 / math.sqrt(t * t + 1.0)
-                s = t * c
-                # A <- G^T A G on the upper triangle only (A stays symmetric): the rotation
-                # zeroes A[p, q] and mixes the rest of rows and columns p and q.
-                A[p, p] -= t * apq
-                A[q, q] += t * apq
-                A[p, q] = 0.0
-                for k in range(p):
-                    _rotate_pair(A, k, p, k, q, c, s)
-                for k in range(p + 1, q):
-                    _rotate_pair(A, p, k, k, q, c, s)
-                for k in range(q + 1, n):
-                    _rotate_pair(A, p, k, q, k, c, s)
-    lowest = A[0, 0]
-    for i in range(1, n):
-        lowest = min(lowest, A[i, i])
-    return lowest
+        x = x_next
+    return x
 
 
 # --- kinematics ------------------------------------------------------------------------------
@@ -255,14 +492,14 @@ def _axis_angle_matrix_into(a, angle, R):
         c + t * a[2] * a[2]
 
 
-@_jit
+@_inline
 def _mm3_into(A, B, out):
     for i in range(3):
         for j in range(3):
             out[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
 
 
-@_jit
+@_inline
 def _affine_into(p, R, x, out):
     """out = p + R x (3-vectors)."""
     for i in range(3):
@@ -270,24 +507,21 @@ def _affine_into(p, R, x, out):
 
 
 @_jit
-def _kinematics(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_MC, axis_F):
-    """Body poses in World and body-frame spatial velocity Jacobians ``[w; v]`` about each body
-    origin (Drake's ``CalcJacobianSpatialVelocity(kV, B, 0, World, B)``)."""
-    nb, nv = parent.shape[0], v.shape[0]
-    R_all = np.empty((nb, 3, 3))
-    p_all = np.empty((nb, 3))
-    axis_W = np.zeros((nb, 3))  # joint axis in World
-    origin_W = np.zeros((nb, 3))  # joint frame M's origin in World
-    R_WF, R_FM, R_WM = np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3))
-    p_WF = np.empty(3)
-    for b in range(nb):
+def _kinematics(q, tree, s):
+    """Body poses in World (``s.R_all``, ``s.p_all``) and body-frame spatial velocity Jacobians
+    ``[w; v]`` about each body origin (``s.J``: Drake's ``CalcJacobianSpatialVelocity(kV, B, 0,
+    World, B)``)."""
+    parent, joint_type, q_start, axis_F = tree.parent, tree.joint_type, tree.q_start, tree.axis_F
+    R_all, p_all, axis_W, origin_W = s.R_all, s.p_all, s.axis_W, s.origin_W
+    R_WF, R_FM, R_WM, p_WF = s.frames[0], s.frames[1], s.frames[2], s.frames[3, 0]
+    for b in range(parent.shape[0]):
         P = parent[b]
         if P < 0:
-            R_WF[:, :] = R_PF[b]
-            p_WF[:] = p_PF[b]
+            R_WF[:, :] = tree.R_PF[b]
+            p_WF[:] = tree.p_PF[b]
         else:
-            _mm3_into(R_all[P], R_PF[b], R_WF)
-            _affine_into(p_all[P], R_all[P], p_PF[b], p_WF)
+            _mm3_into(R_all[P], tree.R_PF[b], R_WF)
+            _affine_into(p_all[P], R_all[P], tree.p_PF[b], p_WF)
         i = q_start[b]
         if joint_type[b] == FREE:
             _quaternion_matrix_into(q[i], q[i + 1], q[i + 2], q[i + 3], R_FM)
@@ -303,15 +537,15 @@ def _kinematics(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_
         else:
             R_WM[:, :] = R_WF
             origin_W[b] = p_WF
-        _mm3_into(R_WM, R_MC[b], R_all[b])
-        _affine_into(origin_W[b], R_WM, p_MC[b], p_all[b])
+        _mm3_into(R_WM, tree.R_MC[b], R_all[b])
+        _affine_into(origin_W[b], R_WM, tree.p_MC[b], p_all[b])
 
-    J = np.zeros((nb, 6, nv))
-    for b in range(nb):
+    J = s.J  # at the bodies' Jacobian columns only (see _section2_buffers)
+    for b in range(parent.shape[0]):
         R = R_all[b]
         a = b
         while a >= 0:
-            k = v_start[a]
+            k = tree.v_start[a]
             rx = p_all[b, 0] - origin_W[a, 0]
             ry = p_all[b, 1] - origin_W[a, 1]
             rz = p_all[b, 2] - origin_W[a, 2]
@@ -331,12 +565,25 @@ def _kinematics(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_
                     J[b, 3 + i, k + 1] = R[0, i] * rz - R[2, i] * rx
                     J[b, 3 + i, k + 2] = R[1, i] * rx - R[0, i] * ry
             a = parent[a]
-    return R_all, p_all, J
 
 
-@_jit
+@_inline
+def _column6(A, k):
+    """Column k of a six-row matrix as a tuple: values, not a view (views inside loops cost
+    their reference counting's calls)."""
+    return A[0, k], A[1, k], A[2, k], A[3, k], A[4, k], A[5, k]
+
+
+@_inline
+def _row6(A, i):
+    """Row i of a six-column matrix as a tuple (see _column6)."""
+    return A[i, 0], A[i, 1], A[i, 2], A[i, 3], A[i, 4], A[i, 5]
+
+
+@_inline
 def _crm_times_into(s, a, out, col):
-    """out[:, col] = crm(s) a for spatial vectors, crm([w; v]) = [[w x, 0], [v x, w x]]."""
+    """out[:, col] = crm(s) a for spatial vectors, crm([w; v]) = [[w x, 0], [v x, w x]] (``s``
+    a 6-vector or a 6-tuple)."""
     wx, wy, wz, vx, vy, vz = s[0], s[1], s[2], s[3], s[4], s[5]
     out[0, col] = wy * a[2] - wz * a[1]
     out[1, col] = wz * a[0] - wx * a[2]
@@ -347,15 +594,19 @@ def _crm_times_into(s, a, out, col):
 
 
 @_jit
-def _jacobian_derivative(Jb, Vb, v, R, J_dot, work):
+def _jacobian_derivative(Jb, Vb, v, R, cols, J_dot, work):
     """d/dt of one body-frame Jacobian into ``J_dot``, as
     DecoupledDynamics._jacobian_derivatives (the free joint's six velocities first, then 1-DoF
-    joints; KinematicTree guarantees both). ``work``: a 6-vector of scratch space."""
-    nv = v.shape[0]
+    joints; KinematicTree guarantees both). ``cols``: the body's Jacobian columns from the body
+    up (the only nonzero ones; its 1-DoF joints' velocities in decreasing order). ``work``: a
+    6-vector of scratch space."""
     after = work  # sum over later joint columns m > k of J[:, m] v_m
     after[:] = 0.0
-    for k in range(nv - 1, 5, -1):
-        _crm_times_into(Jb[:, k], after, J_dot, k)
+    for c in range(cols.shape[0]):
+        k = cols[c]
+        if k < 6:
+            continue  # the free joint's, below
+        _crm_times_into(_column6(Jb, k), after, J_dot, k)
         for r in range(6):
             after[r] += Jb[r, k] * v[k]
     # Free joint's columns: -crm(V) J[:, k], plus R^T (v_WBo x e_j) on the angular ones.
@@ -418,112 +669,98 @@ def _coriolis_kernel(I, Vb, A):
 
 
 @_jit
-def _body_sums(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_MC, axis_F,
-               inertia, mass, com_B, reflected):
+def _body_sums(v, tree, s):
     """The sums over bodies of Section II: M, the Christoffel-consistent C, the CoM, its
-    Jacobian J_g and J_g_dot, with the kinematics they come from."""
-    nb, nv = parent.shape[0], v.shape[0]
-    R_all, p_all, J = _kinematics(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF,
-                                  R_MC, p_MC, axis_F)
+    Jacobian J_g and J_g_dot (into ``s``), and the body Jacobians' derivatives. Returns the
+    total mass and the base body's index."""
+    nb, nv = tree.parent.shape[0], v.shape[0]
+    mass = tree.mass
     m = 0.0
     base = -1
     for b in range(nb):
         m += mass[b]
-        if joint_type[b] == FREE:
+        if tree.joint_type[b] == FREE:
             base = b
 
-    M = np.zeros((nv, nv))
-    C = np.zeros((nv, nv))
-    J_g = np.zeros((3, nv))
-    J_g_dot = np.zeros((3, nv))
-    p_WG = np.zeros(3)
-    J_dot_all = np.zeros((nb, 6, nv))
-    cols = np.empty(nv, dtype=np.int64)
-    Vb = np.empty(6)
-    work = np.empty(6)
-    A = np.empty((6, 6))
-    # Body b's nonzero Jacobian columns (its ancestors' velocities) gathered side by side, and
-    # the products of its mass and Coriolis terms over them, so that the inner loops run over
-    # contiguous memory.
-    Jc = np.empty((6, nv))
-    Jdc = np.empty((6, nv))
-    IJ = np.empty((6, nv))
-    inner = np.empty((6, nv))
-    row_m = np.empty(nv)
-    row_c = np.empty(nv)
+    M, C, J_g, J_g_dot, p_WG = s.M, s.C, s.J_g, s.J_g_dot, s.p_WG
+    for X in (M, C, J_g, J_g_dot):
+        _zero(X)
+    for r in range(3):
+        p_WG[r] = 0.0
+    Vb, work, A = s.V[0], s.V[1], s.A
+    # The products of body b's mass and Coriolis terms with its Jacobian, over the columns up to
+    # its last nonzero one (the others are zero): the loops over columns run over contiguous
+    # memory, and add zero where a column is not the body's.
+    IJ, inner, row_m = s.products[0], s.products[1], s.products[2, 0]
     for b in range(nb):
-        Jb, J_dot = J[b], J_dot_all[b]
-        for r in range(6):
-            s = 0.0
-            for k in range(nv):
-                s += Jb[r, k] * v[k]
-            Vb[r] = s
-        _jacobian_derivative(Jb, Vb, v, R_all[b], J_dot, work)
+        Jb, J_dot = s.J[b], s.J_dot[b]
+        _mv_into(Jb, v, Vb)
+        nc = tree.num_cols[b]
+        cols = tree.cols[b, :nc]
+        _jacobian_derivative(Jb, Vb, v, s.R_all[b], cols, J_dot, work)
         if mass[b] == 0.0:
             continue
-        nc = 0
-        a = b
-        while a >= 0:
-            width = 6 if joint_type[a] == FREE else (1 if joint_type[a] == REVOLUTE else 0)
-            for j in range(width):
-                cols[nc] = v_start[a] + j
-                nc += 1
-            a = parent[a]
-        for r in range(6):
-            for c in range(nc):
-                Jc[r, c] = Jb[r, cols[c]]
-                Jdc[r, c] = J_dot[r, cols[c]]
+        width = tree.width[b]
         # M += J^T I J, C += J^T (I J_dot + 1/2 A J) (design notes, section 3).
-        I = inertia[b]
+        I = tree.inertia[b]
         _coriolis_kernel(I, Vb, A)
         for i in range(6):
-            IJ[i, :nc] = 0.0
-            inner[i, :nc] = 0.0
-            for j in range(6):
-                f, h = I[i, j], 0.5 * A[i, j]
-                for c in range(nc):
-                    IJ[i, c] += f * Jc[j, c]
-                    inner[i, c] += f * Jdc[j, c] + h * Jc[j, c]
+            f0, f1, f2, f3, f4, f5 = _row6(I, i)
+            h0, h1, h2, h3, h4, h5 = 0.5 * A[i, 0], 0.5 * A[i, 1], 0.5 * A[i, 2], \
+                0.5 * A[i, 3], 0.5 * A[i, 4], 0.5 * A[i, 5]
+            for c in range(width):
+                IJ[i, c] = (f0 * Jb[0, c] + f1 * Jb[1, c] + f2 * Jb[2, c] + f3 * Jb[3, c]
+                            + f4 * Jb[4, c] + f5 * Jb[5, c])
+                inner[i, c] = ((f0 * J_dot[0, c] + h0 * Jb[0, c])
+                               + (f1 * J_dot[1, c] + h1 * Jb[1, c])
+                               + (f2 * J_dot[2, c] + h2 * Jb[2, c])
+                               + (f3 * J_dot[3, c] + h3 * Jb[3, c])
+                               + (f4 * J_dot[4, c] + h4 * Jb[4, c])
+                               + (f5 * J_dot[5, c] + h5 * Jb[5, c]))
         for ci in range(nc):
-            row_m[:nc] = 0.0
-            row_c[:nc] = 0.0
-            for r in range(6):
-                f = Jc[r, ci]
-                for c in range(nc):
-                    row_c[c] += f * inner[r, c]
-                for c in range(ci, nc):  # M is symmetric: each pair of columns once
-                    row_m[c] += f * IJ[r, c]
             i = cols[ci]
-            for c in range(nc):
-                C[i, cols[c]] += row_c[c]
-            M[i, i] += row_m[ci]
-            for c in range(ci + 1, nc):
-                M[i, cols[c]] += row_m[c]
-                M[cols[c], i] += row_m[c]
+            w0, w1, w2, w3, w4, w5 = _column6(Jb, i)
+            for c in range(width):
+                C[i, c] += (w0 * inner[0, c] + w1 * inner[1, c] + w2 * inner[2, c]
+                            + w3 * inner[3, c] + w4 * inner[4, c] + w5 * inner[5, c])
+            # M is symmetric: each pair of columns once, as (ci, c) for c >= ci, into M[i, j]
+            # (M[j, i] follows after the sum).
+            for c in range(tree.span[b, ci, 0], tree.span[b, ci, 1]):
+                row_m[c] = (w0 * IJ[0, c] + w1 * IJ[1, c] + w2 * IJ[2, c] + w3 * IJ[3, c]
+                            + w4 * IJ[4, c] + w5 * IJ[5, c])
+            for c in range(ci, nc):
+                M[i, cols[c]] += row_m[cols[c]]
         # CoM Jacobian: sum m_i/m R_i P_i J_i, with P_i J_i = J_v - c x J_w, and its
-        # derivative sum m_i/m (R_i hat(w_i) P_i J_i + R_i P_i J_dot_i).
+        # derivative sum m_i/m (R_i hat(w_i) P_i J_i + R_i P_i J_dot_i) (zero where a column is
+        # not the body's).
         frac = mass[b] / m
-        Rb = R_all[b]
+        Rb = s.R_all[b]
         wx, wy, wz = Vb[0], Vb[1], Vb[2]
-        cx, cy, cz = com_B[b, 0], com_B[b, 1], com_B[b, 2]
-        for c in range(nc):
-            k = cols[c]
-            ax, ay, az = Jc[0, c], Jc[1, c], Jc[2, c]
-            px = Jc[3, c] - (cy * az - cz * ay)
-            py = Jc[4, c] - (cz * ax - cx * az)
-            pz = Jc[5, c] - (cx * ay - cy * ax)
-            ax, ay, az = Jdc[0, c], Jdc[1, c], Jdc[2, c]
-            dx = Jdc[3, c] - (cy * az - cz * ay) + (wy * pz - wz * py)
-            dy = Jdc[4, c] - (cz * ax - cx * az) + (wz * px - wx * pz)
-            dz = Jdc[5, c] - (cx * ay - cy * ax) + (wx * py - wy * px)
-            for r in range(3):
-                J_g[r, k] += frac * (Rb[r, 0] * px + Rb[r, 1] * py + Rb[r, 2] * pz)
-                J_g_dot[r, k] += frac * (Rb[r, 0] * dx + Rb[r, 1] * dy + Rb[r, 2] * dz)
+        cx, cy, cz = tree.com_B[b, 0], tree.com_B[b, 1], tree.com_B[b, 2]
+        for k in range(width):
+            ax, ay, az = Jb[0, k], Jb[1, k], Jb[2, k]
+            px = Jb[3, k] - (cy * az - cz * ay)
+            py = Jb[4, k] - (cz * ax - cx * az)
+            pz = Jb[5, k] - (cx * ay - cy * ax)
+            ax, ay, az = J_dot[0, k], J_dot[1, k], J_dot[2, k]
+            dx = J_dot[3, k] - (cy * az - cz * ay) + (wy * pz - wz * py)
+            dy = J_dot[4, k] - (cz * ax - cx * az) + (wz * px - wx * pz)
+            dz = J_dot[5, k] - (cx * ay - cy * ax) + (wx * py - wy * px)
+            J_g[0, k] += frac * (Rb[0, 0] * px + Rb[0, 1] * py + Rb[0, 2] * pz)
+            J_g[1, k] += frac * (Rb[1, 0] * px + Rb[1, 1] * py + Rb[1, 2] * pz)
+            J_g[2, k] += frac * (Rb[2, 0] * px + Rb[2, 1] * py + Rb[2, 2] * pz)
+            J_g_dot[0, k] += frac * (Rb[0, 0] * dx + Rb[0, 1] * dy + Rb[0, 2] * dz)
+            J_g_dot[1, k] += frac * (Rb[1, 0] * dx + Rb[1, 1] * dy + Rb[1, 2] * dz)
+            J_g_dot[2, k] += frac * (Rb[2, 0] * dx + Rb[2, 1] * dy + Rb[2, 2] * dz)
         for r in range(3):
-            p_WG[r] += frac * (p_all[b, r] + Rb[r, 0] * cx + Rb[r, 1] * cy + Rb[r, 2] * cz)
-    for k in range(nv):
-        M[k, k] += reflected[k]
-    return m, base, R_all, p_all, J, J_dot_all, M, C, J_g, J_g_dot, p_WG
+            p_WG[r] += frac * (s.p_all[b, r] + Rb[r, 0] * cx + Rb[r, 1] * cy + Rb[r, 2] * cz)
+    # Each pair's sum is in one of M[i, j], M[j, i] (the same for all bodies: the order of two
+    # joints in a body's columns is the tree's), the other is zero.
+    for i in range(nv):
+        for j in range(i + 1, nv):
+            M[i, j] = M[j, i] = M[i, j] + M[j, i]
+        M[i, i] += tree.reflected[i]
+    return m, base
 
 
 @_jit
@@ -534,8 +771,8 @@ def _z_times_into(G, X, identity, out):
     for r in range(out.shape[0]):
         g0, g1, g2 = G[0, 6 + r], G[1, 6 + r], G[2, 6 + r]
         for c in range(X.shape[1]):
-            s = -g0 * X[3, c] - g1 * X[4, c] - g2 * X[5, c]
-            out[r, c] = s + X[6 + r, c] if identity else s
+            t = -g0 * X[3, c] - g1 * X[4, c] - g2 * X[5, c]
+            out[r, c] = t + X[6 + r, c] if identity else t
 
 
 @_jit
@@ -544,18 +781,20 @@ def _times_zt_into(X, G, identity, out):
     for i in range(X.shape[0]):
         x0, x1, x2 = X[i, 3], X[i, 4], X[i, 5]
         for r in range(out.shape[1]):
-            s = -x0 * G[0, 6 + r] - x1 * G[1, 6 + r] - x2 * G[2, 6 + r]
-            out[i, r] = s + X[i, 6 + r] if identity else s
+            t = -x0 * G[0, 6 + r] - x1 * G[1, 6 + r] - x2 * G[2, 6 + r]
+            out[i, r] = t + X[i, 6 + r] if identity else t
 
 
 @_jit
-def _transformation(v, R, M, C, J_g, J_g_dot):
-    """T of (3), its derivative, N of (4) and N_dot, and T^-1."""
-    nv = v.shape[0]
-    n = nv - 6
-    J_bw = np.zeros((3, nv))
-    J_bw_dot = np.zeros((3, nv))
+def _transformation(v, R, s):
+    """T of (3) with N of (4) as its last rows, its derivative (N_dot last), and T^-1, into
+    ``s.T``, ``s.T_dot``, ``s.T_inv``."""
+    T, T_dot, J_g, J_g_dot = s.T, s.T_dot, s.J_g, s.J_g_dot
+    T[:3], T_dot[:3] = J_g, J_g_dot
     # J_bw = [R^T, 0, 0], J_bw_dot = [-hat(R^T w) R^T, 0, 0] (w = v[:3] in World).
+    J_bw, J_bw_dot = T[3:6], T_dot[3:6]
+    _zero(J_bw)
+    _zero(J_bw_dot)
     wx = R[0, 0] * v[0] + R[1, 0] * v[1] + R[2, 0] * v[2]
     wy = R[0, 1] * v[0] + R[1, 1] * v[1] + R[2, 1] * v[2]
     wz = R[0, 2] * v[0] + R[1, 2] * v[1] + R[2, 2] * v[2]
@@ -565,130 +804,176 @@ def _transformation(v, R, M, C, J_g, J_g_dot):
         J_bw_dot[1, j] = -(wz * R[j, 0] - wx * R[j, 2])
         J_bw_dot[2, j] = -(wx * R[j, 1] - wy * R[j, 0])
 
-    ZM = np.empty((n, nv))
-    ZdM = np.empty((n, nv))
-    ZMd = np.empty((n, nv))
-    ZMZ = np.empty((n, n))
-    _z_times_into(J_g, M, True, ZM)
+    ZM, ZdM, ZMd = s.Z[0], s.Z[1], s.Z[2]
+    ZMZ, LU, a, b, c = s.ZZ[0], s.ZZ[1], s.ZZ[2], s.ZZ[3], s.ZZ[4]
+    N, N_dot = T[6:], T_dot[6:]
+    _z_times_into(J_g, s.M, True, ZM)
     _times_zt_into(ZM, J_g, True, ZMZ)
-    LU, piv = _lu(ZMZ)
-    N = _lu_solve(LU, piv, ZM)  # (4)
-    _z_times_into(J_g_dot, M, False, ZdM)
-    _z_times_into(J_g, C + C.T, True, ZMd)  # Z M_dot, M_dot = C + C^T
+    LU[:, :] = ZMZ
+    N[:, :] = ZM
+    _solve_into(LU, N)  # (4)
+    _z_times_into(J_g_dot, s.M, False, ZdM)
+    M_dot = s.M_dot
+    for i in range(M_dot.shape[0]):
+        for j in range(M_dot.shape[1]):
+            M_dot[i, j] = s.C[i, j] + s.C[j, i]
+    _z_times_into(J_g, M_dot, True, ZMd)
     # d/dt (Z M Z^T) = Z_dot M Z^T + Z M_dot Z^T + Z M Z_dot^T
-    a, b, c = np.empty((n, n)), np.empty((n, n)), np.empty((n, n))
     _times_zt_into(ZdM, J_g, True, a)
     _times_zt_into(ZMd, J_g, True, b)
     _times_zt_into(ZM, J_g_dot, False, c)
-    rhs = ZdM + ZMd
+    n = N.shape[0]
     for i in range(n):
+        for j in range(N.shape[1]):
+            N_dot[i, j] = ZdM[i, j] + ZMd[i, j]
         for k in range(n):
             f = (a[i, k] + b[i, k]) + c[i, k]
             if f != 0.0:
-                for j in range(nv):
-                    rhs[i, j] -= f * N[k, j]
-    N_dot = _lu_solve(LU, piv, rhs)
-
-    T = np.empty((nv, nv))  # (3)
-    T_dot = np.empty((nv, nv))
-    T[:3], T[3:6], T[6:] = J_g, J_bw, N
-    T_dot[:3], T_dot[3:6], T_dot[6:] = J_g_dot, J_bw_dot, N_dot
-    return N, N_dot, T, T_dot, _inv(T)
+                for j in range(N.shape[1]):
+                    N_dot[i, j] -= f * N[k, j]
+    LU[:, :] = ZMZ
+    _solve_into(LU, N_dot)
+    _inv_into(T, s.T_LU, s.T_inv)
 
 
 @_jit
-def _lambda_gamma(M, C, T_inv, T_dot):
-    """Lambda = T^-T M T^-1 (5) and Gamma = T^-T (C - M T^-1 T_dot) T^-1 (6), formed (for
-    :func:`decompose`; the law only applies them to vectors)."""
-    X = C - _mm(M, _mm(T_inv, T_dot))
-    return _mtm(T_inv, _mm(M, T_inv)), _mtm(T_inv, _mm(X, T_inv))
+def _section2(q, v, tree, s):
+    """Kinematics, the body sums and the transformation (3)-(4) at ``(q, v)``, into ``s``.
+    Returns the total mass and the base body's index."""
+    _kinematics(q, tree, s)
+    m, base = _body_sums(v, tree, s)
+    _transformation(v, s.R_all[base], s)
+    return m, base
 
 
 @_jit
-def _lambda_times(M, T_inv, y):
-    """Lambda y = T^-T (M (T^-1 y)) (5): the law applies Lambda and Gamma to vectors only, so
-    it never forms them (13x13 products) but multiplies through."""
-    return _mtv(T_inv, _mv(M, _mv(T_inv, y)))
-
-
-@_jit
-def _lambda_gamma_times(M, C, T_inv, T_dot, a, b):
-    """Lambda a + Gamma b = T^-T (M T^-1 (a - T_dot u) + C u), u = T^-1 b (5)-(6)."""
-    u = _mv(T_inv, b)
-    return _mtv(T_inv, _mv(M, _mv(T_inv, a - _mv(T_dot, u))) + _mv(C, u))
-
-
-@_jit
-def _gamma_t_times(M, C, T_inv, T_dot, y):
-    """Gamma^T y = T^-T (C^T u - T_dot^T T^-T (M u)), u = T^-1 y (6)."""
-    u = _mv(T_inv, y)
-    return _mtv(T_inv, _mtv(C, u) - _mtv(T_dot, _mtv(T_inv, _mv(M, u))))
-
-
-@_jit
-def _jt_dot_times(J_y_dot, Jt, T_dot, T_inv, y):
-    """Jt_dot y for Jt_dot = (J_y_dot - Jt T_dot) T^-1, the derivative of Jt = J_y T^-1
-    (d/dt T^-1 = -T^-1 T_dot T^-1)."""
-    u = _mv(T_inv, y)
-    return _mv(J_y_dot, u) - _mv(Jt, _mv(T_dot, u))
-
-
-@_jit
-def _embed(nv, first, a):
-    """The nv-vector that is ``a`` at ``first:first + len(a)`` and zero elsewhere."""
-    out = np.zeros(nv)
-    out[first:first + a.shape[0]] = a
-    return out
-
-
-@_jit
-def _decompose(q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_MC, axis_F,
-               inertia, mass, com_B, reflected, gravity_W):
+def _decompose(q, v, model, index, gravity_W, work):
     """Every quantity of :class:`aerial_drake.decoupling.Decomposition`, with the same
-    formulas (see that module)."""
-    m, base, R_all, p_all, J, J_dot_all, M, C, J_g, J_g_dot, p_WG = _body_sums(
-        q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_MC, axis_F, inertia,
-        mass, com_B, reflected)
-    R = R_all[base]
-    g = -m * _mtv(J_g, gravity_W)  # -(gravity generalized force)
-    N, N_dot, T, T_dot, T_inv = _transformation(v, R, M, C, J_g, J_g_dot)
-    Lambda, Gamma = _lambda_gamma(M, C, T_inv, T_dot)
-    xi = _mv(T, v)
-    return (m, R, p_all, R_all, J, J_dot_all, M, C, g, J_g, J_g_dot, p_WG, N, N_dot, T, T_dot,
-            T_inv, Lambda, Gamma, xi)
+    formulas (see that module); ``work`` sized by :func:`_section2_buffers`."""
+    tree, _, _ = _unpack_tree(model, index)
+    s, end = _section2_buffers(work, 0, tree.parent.shape[0], v.shape[0])
+    if end > work.shape[0]:
+        raise ValueError("workspace too small")
+    m, base = _section2(q, v, tree, s)
+    g = np.empty(v.shape[0])
+    _mtv_into(s.J_g, gravity_W, g)
+    g *= -m  # -(gravity generalized force)
+    # Lambda = T^-T M T^-1 (5) and Gamma = T^-T (C - M T^-1 T_dot) T^-1 (6).
+    nv = v.shape[0]
+    X, Y = np.empty((nv, nv)), np.empty((nv, nv))
+    _mm_into(s.T_inv, s.T_dot, X)
+    _mm_into(s.M, X, Y)
+    X[:, :] = s.C - Y
+    Lambda, Gamma = np.empty((nv, nv)), np.empty((nv, nv))
+    _mm_into(s.M, s.T_inv, Y)
+    _mtm_into(s.T_inv, Y, Lambda)
+    _mm_into(X, s.T_inv, Y)
+    _mtm_into(s.T_inv, Y, Gamma)
+    xi = np.empty(nv)
+    _mv_into(s.T, v, xi)
+    # Copies: the views into work must not outlive the call (see _view).
+    return (m, s.R_all[base].copy(), s.p_all.copy(), s.R_all.copy(), s.J.copy(),
+            s.J_dot.copy(), s.M.copy(), s.C.copy(), g, s.J_g.copy(), s.J_g_dot.copy(),
+            s.p_WG.copy(), s.T[6:].copy(), s.T_dot[6:].copy(), s.T.copy(), s.T_dot.copy(),
+            s.T_inv.copy(), Lambda, Gamma, xi)
 
 
 # --- Section III -----------------------------------------------------------------------------
+# Lambda, Gamma and T^-1 meet only vectors here, most of them zero outside one block (e.g.
+# [0; w_b_dot; 0]), and only a block of each result is used: each product runs over the
+# columns of T^-1 that the nonzero entries meet (the same sums, without the zero terms).
 
 @_jit
-def _unit_vector_derivatives(a, a_dot, a_ddot):
-    """As control.unit_vector_derivatives."""
-    n = math.sqrt(_dot(a, a))
-    b = a / n
+def _lambda_gamma_times(M, C, T_inv, a, first, u, T_dot_u, out, out_first, work):
+    """Lambda a + Gamma b = T^-T (M T^-1 (a - T_dot u) + C u), u = T^-1 b (5)-(6), for ``a``
+    zero outside ``first:first + len(a)``, given ``u`` and ``T_dot u``: its entries from
+    ``out_first`` into ``out``. ``work``: three nv-vectors of scratch."""
+    r, t, y = work[0], work[1], work[2]
+    for i in range(r.shape[0]):
+        r[i] = (a[i - first] if first <= i < first + a.shape[0] else 0.0) - T_dot_u[i]
+    _mv_into(T_inv, r, t)
+    _mv_into(M, t, y)
+    _mv_into(C, u, r)
+    for i in range(y.shape[0]):
+        y[i] += r[i]
+    _mtv_into(T_inv, y, out, out_first)
+
+
+@_jit
+def _gamma_t_times(M, C, T_inv, T_dot, u, out, out_first, work):
+    """Gamma^T y = T^-T (C^T u - T_dot^T T^-T (M u)), u = T^-1 y (6), given ``u``: its entries
+    from ``out_first`` into ``out``. ``work``: three nv-vectors of scratch."""
+    r, t, y = work[0], work[1], work[2]
+    _mv_into(M, u, r)
+    _mtv_into(T_inv, r, t)
+    _mtv_into(T_dot, t, r)
+    _mtv_into(C, u, y)
+    for i in range(y.shape[0]):
+        y[i] -= r[i]
+    _mtv_into(T_inv, y, out, out_first)
+
+
+@_jit
+def _jt_dot_times(J_y_dot, Jt, u, T_dot_u, out, work):
+    """Jt_dot y = J_y_dot u - Jt (T_dot u), u = T^-1 y, for Jt_dot = (J_y_dot - Jt T_dot) T^-1,
+    the derivative of Jt = J_y T^-1 (d/dt T^-1 = -T^-1 T_dot T^-1), given ``u`` and
+    ``T_dot u``. ``work``: a task vector of scratch."""
+    _mv_into(Jt, T_dot_u, work)
+    _mv_into(J_y_dot, u, out)
+    for i in range(out.shape[0]):
+        out[i] -= work[i]
+
+
+@_jit
+def _unit_vector_derivatives(a, a_dot, a_ddot, b, b_dot, b_ddot):
+    """As control.unit_vector_derivatives: b = a / |a| and its first two derivatives."""
+    n = _norm(a)
+    for i in range(3):
+        b[i] = a[i] / n
     ad_b = _dot(a_dot, b)
-    b_dot = (a_dot - b * ad_b) / n
-    b_ddot = (a_ddot - b_dot * ad_b - b * (_dot(a_ddot, b) + _dot(a_dot, b_dot))) / n \
-        - b_dot * ad_b / n
-    return b, b_dot, b_ddot
+    for i in range(3):
+        b_dot[i] = (a_dot[i] - b[i] * ad_b) / n
+    e = _dot(a_ddot, b) + _dot(a_dot, b_dot)
+    for i in range(3):
+        b_ddot[i] = (a_ddot[i] - b_dot[i] * ad_b - b[i] * e) / n - b_dot[i] * ad_b / n
 
 
 @_jit
-def _desired_attitude(f_d, f_d_dot, f_d_ddot, b1, b1_dot, b1_ddot):
-    """As control.desired_attitude: R_d of (12)-(13) and its first two derivatives."""
-    b3, b3_dot, b3_ddot = _unit_vector_derivatives(f_d, f_d_dot, f_d_ddot)  # (12)
-    c = _cross(b3, b1)
-    c_dot = _cross(b3_dot, b1) + _cross(b3, b1_dot)
-    c_ddot = _cross(b3_ddot, b1) + 2.0 * _cross(b3_dot, b1_dot) + _cross(b3, b1_ddot)
-    b2, b2_dot, b2_ddot = _unit_vector_derivatives(c, c_dot, c_ddot)
-    R_d = np.empty((3, 3))  # (13)
-    R_d_dot = np.empty((3, 3))
-    R_d_ddot = np.empty((3, 3))
-    R_d[:, 0] = _cross(b2, b3)
-    R_d_dot[:, 0] = _cross(b2_dot, b3) + _cross(b2, b3_dot)
-    R_d_ddot[:, 0] = _cross(b2_ddot, b3) + 2.0 * _cross(b2_dot, b3_dot) + _cross(b2, b3_ddot)
-    R_d[:, 1], R_d_dot[:, 1], R_d_ddot[:, 1] = b2, b2_dot, b2_ddot
-    R_d[:, 2], R_d_dot[:, 2], R_d_ddot[:, 2] = b3, b3_dot, b3_ddot
-    return R_d, R_d_dot, R_d_ddot
+def _cross_derivatives(a, a_dot, a_ddot, b, b_dot, b_ddot, c, c_dot, c_ddot):
+    """c = a x b and its first two derivatives (product rule)."""
+    for i in range(3):
+        c[i] = _cross_at(a, b, i)
+        c_dot[i] = _cross_at(a_dot, b, i) + _cross_at(a, b_dot, i)
+        c_ddot[i] = (_cross_at(a_ddot, b, i) + 2.0 * _cross_at(a_dot, b_dot, i)
+                     + _cross_at(a, b_ddot, i))
+
+
+@_jit
+def _desired_attitude(f_d, heading, R_d, work):
+    """As control.desired_attitude: R_d of (12)-(13) and its first two derivatives (``R_d[k]``,
+    from f_d and its derivatives ``f_d[k]`` and the heading b1 and its derivatives
+    ``heading[3 k:3 k + 3]``). ``work``: (9, 3) scratch."""
+    b3, b3_dot, b3_ddot = work[0], work[1], work[2]
+    c, c_dot, c_ddot = work[3], work[4], work[5]
+    b2, b2_dot, b2_ddot = work[6], work[7], work[8]
+    _unit_vector_derivatives(f_d[0], f_d[1], f_d[2], b3, b3_dot, b3_ddot)  # (12)
+    _cross_derivatives(b3, b3_dot, b3_ddot, heading[0:3], heading[3:6], heading[6:9], c, c_dot,
+                       c_ddot)
+    _unit_vector_derivatives(c, c_dot, c_ddot, b2, b2_dot, b2_ddot)
+    _cross_derivatives(b2, b2_dot, b2_ddot, b3, b3_dot, b3_ddot, c, c_dot, c_ddot)  # b1
+    for k in range(3):  # (13): R_d = [b2 x b3, b2, b3]
+        for i in range(3):
+            R_d[k, i, 0], R_d[k, i, 1], R_d[k, i, 2] = work[3 + k, i], work[6 + k, i], \
+                work[k, i]
+
+
+@_jit
+def _weighted_dot(a, k, b):
+    """a . (k * b), k elementwise."""
+    s = 0.0
+    for i in range(a.shape[0]):
+        s += a[i] * (k[i] * b[i])
+    return s
 
 
 @_jit
@@ -697,167 +982,322 @@ def _rotation_angle(R):
     return math.acos(min(max(c, -1.0), 1.0))
 
 
-@_jit
-def _norm(a):
-    return math.sqrt(_dot(a, a))
+#: The law's parameters (after the tree in the packed arrays, see CompiledLaw).
+_LawParams = namedtuple("_LawParams", "nq ee_body q3_q q3_v R_BE p_BE gains limits")
 
 
 @_jit
-def _law(x, nq, com, task, heading, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC,
-         p_MC, axis_F, inertia, mass, com_B, reflected, ee_body, R_BE, p_BE, q3_q, q3_v, gains,
-         limits, command, diagnostics):
+def _unpack_law(model, index):
+    """The tree and the law's parameters packed by :class:`CompiledLaw`."""
+    tree, at, k = _unpack_tree(model, index)
+    n = tree.reflected.shape[0] - 6
+    R_BE, at = _mat(model, at, 3, 3)
+    p_BE, at = _vec(model, at, 3)
+    gains, at = _vec(model, at, 17 + 2 * n)
+    limits, at = _vec(model, at, 2)
+    if at != model.shape[0] or k + 4 != index.shape[0]:
+        raise ValueError("the packed arrays do not match the tree")
+    return tree, _LawParams(index[k], index[k + 1], index[k + 2], index[k + 3], R_BE, p_BE, gains,
+                            limits)
+
+
+#: The law's buffers (see :func:`_law_buffers`). Stacks of a quantity and its derivatives:
+#: ``Re3``, ``x_t`` (x_t, x_t_dot, x_t_dd), ``f_d``, ``R_d``, ``Omega_d``, ``w_d``, ``top``,
+#: ``J_y`` and ``y_t``; ``z_d`` is z_d, z_d_dot; the other stacks are scratch.
+_LawBuffers = namedtuple(
+    "_LawBuffers", "xi Re3 x_t f_d xg_dd e3 R_d S3 Omega_d RtRd RdtR w_d e_R w_t w_b_dot u2_rho "
+                   "v3 w_i Pp top hat Rw J_y R_WE p_WE Jt J3 JtJ J3_inv R_err y_t z z_d z_t a12 "
+                   "u vn vnv u_prime F force_b")
+
+
+@_jit
+def _law_buffers(work, nb, nv):
+    """Section II's and the law's buffers in ``work``, and the size they take."""
+    n = nv - 6
+    s, at = _section2_buffers(work, 0, nb, nv)
+    xi, at = _vec(work, at, nv)
+    Re3, at = _mat(work, at, 2, 3)
+    x_t, at = _mat(work, at, 3, 3)
+    f_d, at = _mat(work, at, 3, 3)
+    xg_dd, at = _vec(work, at, 3)
+    e3, at = _vec(work, at, 3)
+    R_d, at = _mats(work, at, 3, 3, 3)
+    S3, at = _mats(work, at, 2, 3, 3)
+    Omega_d, at = _mat(work, at, 2, 3)
+    RtRd, at = _mat(work, at, 3, 3)
+    RdtR, at = _mat(work, at, 3, 3)
+    w_d, at = _mat(work, at, 2, 3)
+    e_R, at = _vec(work, at, 3)
+    w_t, at = _vec(work, at, 3)
+    w_b_dot, at = _vec(work, at, 3)
+    u2_rho, at = _vec(work, at, 3)
+    v3, at = _mat(work, at, 9, 3)
+    w_i, at = _vec(work, at, 3)
+    Pp, at = _mat(work, at, 3, 6)
+    top, at = _mats(work, at, 3, 3, nv)
+    hat, at = _mat(work, at, 3, 3)
+    Rw, at = _mat(work, at, 3, 3)
+    J_y, at = _mats(work, at, 2, n, nv)
+    R_WE, at = _mat(work, at, 3, 3)
+    p_WE, at = _vec(work, at, 3)
+    Jt, at = _mat(work, at, n, nv)
+    J3, at = _mat(work, at, n, n)
+    JtJ, at = _mat(work, at, n, n)
+    J3_inv, at = _mat(work, at, n, n)
+    R_err, at = _mat(work, at, 3, 3)
+    y_t, at = _mat(work, at, 2, n)
+    z, at = _vec(work, at, n)
+    z_d, at = _mat(work, at, 2, n)
+    z_t, at = _vec(work, at, n)
+    a12, at = _vec(work, at, 6)
+    u, at = _mat(work, at, 4, nv)
+    vn, at = _mat(work, at, 18, n)
+    vnv, at = _mat(work, at, 3, nv)
+    u_prime, at = _vec(work, at, nv)
+    F, at = _vec(work, at, nv)
+    force_b, at = _vec(work, at, 3)
+    return s, _LawBuffers(xi, Re3, x_t, f_d, xg_dd, e3, R_d, S3, Omega_d, RtRd, RdtR, w_d, e_R,
+                          w_t, w_b_dot, u2_rho, v3, w_i, Pp, top, hat, Rw, J_y, R_WE, p_WE, Jt,
+                          J3, JtJ, J3_inv, R_err, y_t, z, z_d, z_t, a12, u, vn, vnv, u_prime,
+                          F, force_b), at
+
+
+@_jit
+def _workspace_size(nb, nv, law):
+    """The size of Section II's buffers, and of the law's with them if ``law``."""
+    nowhere = np.empty(0)  # the views are not used: only their offsets
+    return _law_buffers(nowhere, nb, nv)[-1] if law else _section2_buffers(nowhere, 0, nb, nv)[-1]
+
+
+@_jit
+def _law(x, com, task, heading, command, diagnostics, model, index, work):
     """The law (10)-(22) at state ``x``, as control.compute_control; writes ``command``
     ``[f, mu, tau]`` and ``diagnostics`` (control.DIAGNOSTICS_LAYOUT). Returns
-    ``(status, f_d_norm, sigma_min)``; on a status other than OK the outputs are incomplete."""
+    ``(status, f_d_norm, sigma_min)``; on a status other than OK the outputs are incomplete.
+    ``model``, ``index``: packed by CompiledLaw; ``work``: sized by :func:`_law_buffers`."""
     for i in range(x.shape[0]):
         if not math.isfinite(x[i]):
             return NONFINITE, 0.0, 0.0
-    q, v = x[:nq], x[nq:]
-    nv = v.shape[0]
+    tree, p = _unpack_law(model, index)
+    nv = tree.reflected.shape[0]
     n = nv - 6
-    m, base, R_all, p_all, Jall, J_dot_all, M, C, J_g, J_g_dot, p_WG = _body_sums(
-        q, v, parent, joint_type, q_start, v_start, R_PF, p_PF, R_MC, p_MC, axis_F, inertia,
-        mass, com_B, reflected)
-    R = R_all[base]
-    N, N_dot, T, T_dot, T_inv = _transformation(v, R, M, C, J_g, J_g_dot)
-    xi = _mv(T, v)
+    s, w, end = _law_buffers(work, tree.parent.shape[0], nv)
+    if end > work.shape[0]:
+        raise ValueError("workspace too small")
+    q, v = x[:p.nq], x[p.nq:]
+    m, base = _section2(q, v, tree, s)
+    R, M, C, T, T_dot, T_inv = s.R_all[base], s.M, s.C, s.T, s.T_dot, s.T_inv
+    xi = w.xi
+    _mv_into(T, v, xi)
+    gains = p.gains
     K_x, D_x, k_R, k_w = gains[0:3], gains[3:6], gains[6], gains[7]
     L2, L2_inv = gains[8:11], gains[11:14]
     K_y, K_z = gains[14:14 + n], gains[14 + n:14 + 2 * n]
     gamma1, gamma2, gravity = gains[14 + 2 * n], gains[15 + 2 * n], gains[16 + 2 * n]
-    xg_dot, w_b, rho = xi[:3], xi[3:6], xi[6:]
+    w_b, rho = xi[3:6], xi[6:]
     x_d, xd1, xd2, xd3, xd4 = com[0:3], com[3:6], com[6:9], com[9:12], com[12:15]
-    Re3 = R[:, 2].copy()
-    ge3 = np.zeros(3)
-    ge3[2] = gravity
+    Re3, Re3_dot = w.Re3[0], w.Re3[1]
+    x_t, x_t_dot, x_t_dd = w.x_t[0], w.x_t[1], w.x_t[2]
+    f_d, f_d_dot, f_d_ddot = w.f_d[0], w.f_d[1], w.f_d[2]
+    e3, xg_dd = w.e3, w.xg_dd
+    e3[0], e3[1], e3[2] = 0.0, 0.0, 1.0
 
     # CoM control (10)-(11).
-    x_t = p_WG - x_d
-    x_t_dot = xg_dot - xd1
-    f_d = m * (xd2 + ge3) - K_x * x_t - D_x * x_t_dot  # (10)
+    for i in range(3):
+        Re3[i] = R[i, 2]
+        x_t[i] = s.p_WG[i] - x_d[i]
+        x_t_dot[i] = xi[i] - xd1[i]
+        f_d[i] = m * (xd2[i] + gravity * e3[i]) - K_x[i] * x_t[i] - D_x[i] * x_t_dot[i]  # (10)
     f_d_norm = _norm(f_d)
-    if not f_d_norm > limits[1]:
+    if not f_d_norm > p.limits[1]:
         return ASSUMPTION_2, f_d_norm, 0.0
     u1 = _dot(f_d, Re3)  # (11)
-    xg_dd = u1 * Re3 / m - ge3  # (9a), for the attitude feed-forward
-    x_t_dd = xg_dd - xd2
-    f_d_dot = m * xd3 - K_x * x_t_dot - D_x * x_t_dd
-    e3 = np.zeros(3)
-    e3[2] = 1.0
-    Re3_dot = _mv(R, _cross(w_b, e3))
+    for i in range(3):  # (9a), for the attitude feed-forward
+        xg_dd[i] = u1 * Re3[i] / m - gravity * e3[i]
+        x_t_dd[i] = xg_dd[i] - xd2[i]
+        f_d_dot[i] = m * xd3[i] - K_x[i] * x_t_dot[i] - D_x[i] * x_t_dd[i]
+    w_e3 = w.v3[0]
+    _cross_into(w_b, e3, w_e3)
+    _mv_into(R, w_e3, Re3_dot)
     u1_dot = _dot(f_d_dot, Re3) + _dot(f_d, Re3_dot)
-    xg_ddd = (u1_dot * Re3 + u1 * Re3_dot) / m
-    f_d_ddot = m * xd4 - K_x * x_t_dd - D_x * (xg_ddd - xd3)
+    for i in range(3):
+        xg_ddd = (u1_dot * Re3[i] + u1 * Re3_dot[i]) / m
+        f_d_ddot[i] = m * xd4[i] - K_x[i] * x_t_dd[i] - D_x[i] * (xg_ddd - xd3[i])
 
     # Attitude control (12)-(16).
-    R_d, R_d_dot, R_d_ddot = _desired_attitude(f_d, f_d_dot, f_d_ddot, heading[0:3],
-                                               heading[3:6], heading[6:9])
-    Omega_d = _vee(_mtm(R_d, R_d_dot))
-    Omega_d_dot = _vee(_mtm(R_d_dot, R_d_dot) + _mtm(R_d, R_d_ddot))
-    RtRd = _mtm(R, R_d)
-    w_d = _mv(RtRd, Omega_d)
-    w_d_dot = -_cross(w_b, w_d) + _mv(RtRd, Omega_d_dot)
-    RdtR = _mtm(R_d, R)
-    e_R = _vee(RdtR)  # (14)
-    w_t = w_b - w_d  # (15)
-    w_b_dot = w_d_dot - L2_inv * (k_R * e_R + k_w * w_t)
+    R_d = w.R_d
+    _desired_attitude(w.f_d, heading, R_d, w.v3)
+    Omega_d, Omega_d_dot = w.Omega_d[0], w.Omega_d[1]
+    S, S2 = w.S3[0], w.S3[1]
+    _mtm_into(R_d[0], R_d[1], S)
+    _vee_into(S, Omega_d)
+    _mtm_into(R_d[1], R_d[1], S)
+    _mtm_into(R_d[0], R_d[2], S2)
+    for i in range(3):
+        for j in range(3):
+            S[i, j] += S2[i, j]
+    _vee_into(S, Omega_d_dot)
+    RtRd, RdtR, w_d, w_d_dot = w.RtRd, w.RdtR, w.w_d[0], w.w_d[1]
+    _mtm_into(R, R_d[0], RtRd)
+    _mv_into(RtRd, Omega_d, w_d)
+    _mv_into(RtRd, Omega_d_dot, w_d_dot)
+    for i in range(3):
+        w_d_dot[i] = -_cross_at(w_b, w_d, i) + w_d_dot[i]
+    _mtm_into(R_d[0], R, RdtR)
+    e_R, w_t, w_b_dot = w.e_R, w.w_t, w.w_b_dot
+    _vee_into(RdtR, e_R)  # (14)
+    for i in range(3):
+        w_t[i] = w_b[i] - w_d[i]  # (15)
+        w_b_dot[i] = w_d_dot[i] - L2_inv[i] * (k_R * e_R[i] + k_w * w_t[i])
     # u2 = Lambda22 w_b_dot + Gamma22 w_b (16), and Gamma23 rho of (8) with it.
-    u2_rho = _lambda_gamma_times(M, C, T_inv, T_dot, _embed(nv, 3, w_b_dot),
-                                 _embed(nv, 3, xi[3:]))[3:6]
+    u_b, T_dot_u = w.u[0], w.u[3]  # T^-1 [0; w_b; rho]
+    _mv_into(T_inv, xi[3:], u_b, 3)
+    _mv_into(T_dot, u_b, T_dot_u)
+    _lambda_gamma_times(M, C, T_inv, w_b_dot, 3, u_b, T_dot_u, w.u2_rho, 3, w.vnv)
 
     # Task kinematics: the end-effector frame E on body ee_body, and q3.
-    Ri, pi = R_all[ee_body], p_all[ee_body]
-    Ji, Ji_dot = Jall[ee_body], J_dot_all[ee_body]
-    w_i = _mv(Ji[:3], v)
-    Pp = np.zeros((3, 6))
-    Pp[:, :3] = -_hat(p_BE)
-    Pp[:, 3:] = np.eye(3)
-    top, top_dot = _mm(Pp, Ji), _mm(Pp, Ji_dot)
-    Jw, Jw_dot = Ji[:3].copy(), Ji_dot[:3].copy()
-    Rw = _mm(Ri, _hat(w_i))
-    J_y = np.zeros((n, nv))
-    J_y_dot = np.zeros((n, nv))
-    J_y[0:3], J_y[3:6] = _mm(Ri, top), _mm(Ri, Jw)
-    J_y_dot[0:3] = _mm(Rw, top) + _mm(Ri, top_dot)
-    J_y_dot[3:6] = _mm(Rw, Jw) + _mm(Ri, Jw_dot)
-    J_y[6, q3_v] = 1.0
-    R_WE = _mm(Ri, R_BE)
-    p_WE = pi + _mv(Ri, p_BE)
+    Ri, pi = s.R_all[p.ee_body], s.p_all[p.ee_body]
+    Ji, Ji_dot = s.J[p.ee_body], s.J_dot[p.ee_body]
+    w_i = w.w_i
+    _mv_into(Ji[:3], v, w_i)
+    Pp = w.Pp  # [-hat(p_BE), E]
+    _hat_into(p.p_BE, w.hat)
+    _zero(Pp)
+    for i in range(3):
+        Pp[i, 3 + i] = 1.0
+        for j in range(3):
+            Pp[i, j] = -w.hat[i, j]
+    top, top_dot, tmp = w.top[0], w.top[1], w.top[2]
+    _mm_into(Pp, Ji, top)
+    _mm_into(Pp, Ji_dot, top_dot)
+    Rw = w.Rw
+    _hat_into(w_i, w.hat)
+    _mm_into(Ri, w.hat, Rw)
+    J_y, J_y_dot = w.J_y[0], w.J_y[1]
+    _mm_into(Ri, top, J_y[0:3])
+    _mm_into(Ri, Ji[:3], J_y[3:6])
+    for j in range(nv):
+        J_y[6, j], J_y_dot[6, j] = 0.0, 0.0
+    J_y[6, p.q3_v] = 1.0
+    for (k, A, A_dot) in ((0, top, top_dot), (3, Ji[:3], Ji_dot[:3])):
+        _mm_into(Rw, A, J_y_dot[k:k + 3])
+        _mm_into(Ri, A_dot, tmp)
+        for i in range(3):
+            for j in range(nv):
+                J_y_dot[k + i, j] += tmp[i, j]
+    R_WE, p_WE = w.R_WE, w.p_WE
+    _mm_into(Ri, p.R_BE, R_WE)
+    _mv_into(Ri, p.p_BE, p_WE)
+    for i in range(3):
+        p_WE[i] = pi[i] + p_WE[i]
 
     # Task control (17)-(20).
-    Jt = _mm(J_y, T_inv)
-    J3 = Jt[:, 6:].copy()
-    sigma_min = math.sqrt(max(_min_eigenvalue_sym(_mtm(J3, J3)), 0.0))
-    if not sigma_min > limits[0]:
+    Jt, J3 = w.Jt, w.J3
+    _mm_into(J_y, T_inv, Jt)
+    J3[:, :] = Jt[:, 6:]
+    _mtm_into(J3, J3, w.JtJ)
+    sigma_min = math.sqrt(max(_min_eigenvalue_sym(w.JtJ, w.vn[13:17]), 0.0))
+    if not sigma_min > p.limits[0]:
         return ASSUMPTION_1, f_d_norm, sigma_min
-    R_ed = task[3:12].copy().reshape((3, 3))
-    R_err = _mm(R_WE, R_ed.T)
-    y_t = np.empty(n)
-    y_t[:3] = p_WE - task[0:3]
-    y_t[3:6] = _vee(R_err)
-    y_t[6] = x[q3_q] - task[12]
-    y_d_dot = np.concatenate((task[13:19], task[19:20]))
-    y_d_ddot = np.concatenate((task[20:26], task[26:27]))
-    y_t_dot = _mv(Jt, xi) - y_d_dot  # (17)
-    z = _mv(J3, rho)
-    x12 = _embed(nv, 0, xi[:6])  # [xg_dot; w_b; 0]
-    z_d = y_d_dot - _mv(Jt, x12) - K_y * y_t  # J1 xg_dot + J2 w_b = Jt [xg_dot; w_b; 0]
-    z_t = z - z_d  # (18)
-    a12 = np.zeros(nv)  # [xg_dd; w_b_dot; 0]
-    a12[:3], a12[3:6] = xg_dd, w_b_dot
-    z_d_dot = (y_d_ddot - _mv(Jt, a12) - _jt_dot_times(J_y_dot, Jt, T_dot, T_inv, x12)
-               - K_y * y_t_dot)  # (20)
+    R_err = w.R_err
+    _mm_into(R_WE, task[3:12].reshape((3, 3)).T, R_err)
+    y_t, y_t_dot = w.y_t[0], w.y_t[1]
+    for i in range(3):
+        y_t[i] = p_WE[i] - task[i]
+    _vee_into(R_err, y_t[3:6])
+    y_t[6] = x[p.q3_q] - task[12]
+    y_d_dot, y_d_ddot = task[13:20], task[20:27]
+    _mv_into(Jt, xi, y_t_dot)
+    for i in range(n):
+        y_t_dot[i] -= y_d_dot[i]  # (17)
+    z, z_t, z_d, z_d_dot = w.z, w.z_t, w.z_d[0], w.z_d[1]
+    _mv_into(J3, rho, z)
+    Jx12, Ja12, jt_dot_x12 = w.vn[0], w.vn[1], w.vn[2]
+    _mv_into(Jt, xi[:6], Jx12)  # J1 xg_dot + J2 w_b = Jt [xg_dot; w_b; 0]
+    for i in range(n):
+        z_d[i] = y_d_dot[i] - Jx12[i] - K_y[i] * y_t[i]
+        z_t[i] = z[i] - z_d[i]  # (18)
+    a12 = w.a12  # [xg_dd; w_b_dot]
+    a12[:3], a12[3:] = xg_dd, w_b_dot
+    _mv_into(Jt, a12, Ja12)
+    u_x12 = w.u[1]
+    _mv_into(T_inv, xi[:6], u_x12)
+    _mv_into(T_dot, u_x12, T_dot_u)
+    _jt_dot_times(J_y_dot, Jt, u_x12, T_dot_u, jt_dot_x12, w.vn[17])
+    for i in range(n):
+        z_d_dot[i] = y_d_ddot[i] - Ja12[i] - jt_dot_x12[i] - K_y[i] * y_t_dot[i]  # (20)
     # (19): Lambda_z = J3^-T Lambda33 J3^-1, Gamma_z = J3^-T (Gamma33 - Lambda33 J3^-1 J3_dot)
     # J3^-1, applied to vectors.
-    J3_inv = _inv(J3)
-    s_d = _embed(nv, 6, _mv(J3_inv, z_d))  # [0; 0; J3^-1 z_d]
-    J3_dot_s = _jt_dot_times(J_y_dot, Jt, T_dot, T_inv, s_d)
+    J3_inv = w.J3_inv
+    _inv_into(J3, w.JtJ, J3_inv)
+    s_d, J3_dot_s, d, a3, lg = w.vn[3], w.vn[4], w.vn[5], w.vn[6], w.vn[7]
+    _mv_into(J3_inv, z_d, s_d)  # s = J3^-1 z_d
+    u_s = w.u[2]  # T^-1 [0; 0; s]
+    _mv_into(T_inv, s_d, u_s, 6)
+    _mv_into(T_dot, u_s, T_dot_u)
+    _jt_dot_times(J_y_dot, Jt, u_s, T_dot_u, J3_dot_s, w.vn[17])
     # Lambda_z z_d_dot + Gamma_z z_d
-    #   = J3^-T (Lambda33 J3^-1 (z_d_dot - J3_dot s) + Gamma33 s), s = J3^-1 z_d.
-    zz = _mtv(J3_inv, _lambda_gamma_times(M, C, T_inv, T_dot,
-                                          _embed(nv, 6, _mv(J3_inv, z_d_dot - J3_dot_s)),
-                                          s_d)[6:])
-    u3 = _mtv(J3, zz - K_z * z_t)
+    #   = J3^-T (Lambda33 J3^-1 (z_d_dot - J3_dot s) + Gamma33 s).
+    for i in range(n):
+        d[i] = z_d_dot[i] - J3_dot_s[i]
+    _mv_into(J3_inv, d, a3)
+    _lambda_gamma_times(M, C, T_inv, a3, 6, u_s, T_dot_u, lg, 6, w.vnv)
+    zz, u3 = w.vn[8], w.vn[9]
+    _mtv_into(J3_inv, lg, zz)
+    for i in range(n):
+        zz[i] = zz[i] - K_z[i] * z_t[i]
+    _mtv_into(J3, zz, u3)
 
     # Input mapping (8), (22).
-    u_prime = np.concatenate((u1 * Re3, u2_rho,
-                              -_gamma_t_times(M, C, T_inv, T_dot, _embed(nv, 3, w_b))[6:] + u3))
-    F = _mtv(T, u_prime)  # (22)
-    mu = _mtv(R, F[:3])
-    force_b = _mtv(R, F[3:6])
+    u_prime, F, force_b = w.u_prime, w.F, w.force_b
+    for i in range(3):
+        u_prime[i], u_prime[3 + i] = u1 * Re3[i], w.u2_rho[i]
+    u_w = w.u[0]  # T^-1 [0; w_b; 0]
+    _mv_into(T_inv, w_b, u_w, 3)
+    _gamma_t_times(M, C, T_inv, T_dot, u_w, u_prime[6:], 6, w.vnv)
+    for i in range(n):
+        u_prime[6 + i] = -u_prime[6 + i] + u3[i]
+    _mtv_into(T, u_prime, F)  # (22)
+    mu = w.v3[0]
+    _mtv_into(R, F[:3], mu)
+    _mtv_into(R, F[3:6], force_b)
     command[0] = force_b[2]
-    command[1:4] = mu
-    command[4:] = F[6:]
+    for i in range(3):
+        command[1 + i] = mu[i]
+    for i in range(n):
+        command[4 + i] = F[6 + i]
 
     # Diagnostics (24)-(25), in DIAGNOSTICS_LAYOUT order.
-    Lambda_z_zt = _mtv(J3_inv, _lambda_times(M, T_inv, _embed(nv, 6, _mv(J3_inv, z_t)))[6:])
-    V_task = 0.5 * _dot(z_t, Lambda_z_zt) + _dot(y_t, K_y * K_z * y_t)  # (24)
-    V1 = (0.5 * m * _dot(x_t_dot, x_t_dot) + 0.5 * _dot(x_t, K_x * x_t)
-          + gamma1 * _dot(x_t, x_t_dot) + 0.5 * _dot(w_t, L2 * w_t)
+    s_t, Lz, Lambda_z_zt = w.vn[10], w.vn[11], w.vn[12]
+    _mv_into(J3_inv, z_t, s_t)
+    u_t, Mu = w.u[0], w.vnv[0]  # Lambda [0; 0; s_t] = T^-T (M (T^-1 [0; 0; s_t])) (5)
+    _mv_into(T_inv, s_t, u_t, 6)
+    _mv_into(M, u_t, Mu)
+    _mtv_into(T_inv, Mu, Lz, 6)
+    _mtv_into(J3_inv, Lz, Lambda_z_zt)
+    t = 0.0
+    for i in range(n):
+        t += y_t[i] * (K_y[i] * K_z[i] * y_t[i])
+    V_task = 0.5 * _dot(z_t, Lambda_z_zt) + t  # (24)
+    V1 = (0.5 * m * _dot(x_t_dot, x_t_dot) + 0.5 * _weighted_dot(x_t, K_x, x_t)
+          + gamma1 * _dot(x_t, x_t_dot) + 0.5 * _weighted_dot(w_t, L2, w_t)
           + 0.5 * k_R * (3.0 - RdtR[0, 0] - RdtR[1, 1] - RdtR[2, 2])
           + gamma2 * _dot(e_R, w_t))  # (25)
     k = 0
     for block in (x_t, x_t_dot, e_R, w_t, y_t, z_t):
-        diagnostics[k:k + block.shape[0]] = block
-        k += block.shape[0]
+        for i in range(block.shape[0]):
+            diagnostics[k] = block[i]
+            k += 1
     scalars = (sigma_min, f_d_norm, V1, V_task, V1 + V_task, _norm(x_t),
                _rotation_angle(RdtR), _norm(y_t[:3]), _rotation_angle(R_err),
                force_b[0], force_b[1])
-    for s in scalars:
-        diagnostics[k] = s
+    for value in scalars:
+        diagnostics[k] = value
         k += 1
     return OK, f_d_norm, sigma_min
 
 
 # --- Python entry points ---------------------------------------------------------------------
-
-def _tree_args(tree: KinematicTree) -> tuple:
-    """The tree's arrays in the order the kernels take them (gravity apart: only
-    :func:`_decompose` takes it; the law has g among its gains)."""
-    return (tree.parent, tree.joint_type, tree.q_start, tree.v_start, tree.R_PF, tree.p_PF,
-            tree.R_MC, tree.p_MC, tree.axis_F, tree.spatial_inertia, tree.mass, tree.com_B,
-            tree.reflected_inertia)
-
 
 _DECOMPOSITION_FIELDS = ("m", "R", "p_all", "R_all", "body_J", "body_J_dot", "M", "C", "g",
                          "J_g", "J_g_dot", "p_WG", "N", "N_dot", "T", "T_dot", "T_inv",
@@ -868,9 +1308,11 @@ def decompose(tree: KinematicTree, q: np.ndarray, v: np.ndarray) -> dict[str, np
     """The compiled decomposition at ``(q, v)`` by field name (as in
     :class:`aerial_drake.decoupling.Decomposition`; ``p_all``/``R_all``/``body_J``/
     ``body_J_dot`` are per body of ``tree``). For tests and benchmarks."""
+    model, index = _pack_tree(tree)
+    size = _workspace_size(tree.parent.size, tree.reflected_inertia.size, False)
     values = _decompose(np.ascontiguousarray(q, dtype=float),
-                        np.ascontiguousarray(v, dtype=float), *_tree_args(tree),
-                        tree.gravity_W)
+                        np.ascontiguousarray(v, dtype=float), model, index, tree.gravity_W,
+                        np.zeros(size))
     return dict(zip(_DECOMPOSITION_FIELDS, values))
 
 
@@ -884,7 +1326,10 @@ def pack_gains(K, gravity: float) -> np.ndarray:
 class CompiledLaw:
     """The law (10)-(22) on ``tree``, compiled: ``law(x, com, task, heading, command,
     diagnostics)`` fills the two output arrays and returns ``(status, f_d_norm, sigma_min)``
-    (status :data:`OK`, :data:`ASSUMPTION_1` or :data:`ASSUMPTION_2`).
+    (status :data:`OK`, :data:`ASSUMPTION_1`, :data:`ASSUMPTION_2` or :data:`NONFINITE`).
+
+    The law works in a buffer of this object's: one call at a time per CompiledLaw (each
+    controller has its own).
 
     Args:
         tree: the controller model's tree (:meth:`KinematicTree.from_plant`).
@@ -900,15 +1345,21 @@ class CompiledLaw:
                  q3_velocity_index: int, gains: np.ndarray, sigma_min_J3_limit: float,
                  f_d_limit: float):
         body, R_BE, p_BE = end_effector
-        self._args = _tree_args(tree) + (
-            int(body), np.ascontiguousarray(R_BE, dtype=float),
-            np.ascontiguousarray(p_BE, dtype=float), int(q3_position_index),
-            int(q3_velocity_index), np.ascontiguousarray(gains, dtype=float),
-            np.array([sigma_min_J3_limit, f_d_limit], dtype=float))
-        self._nq = int(num_positions)
-        self._compile(tree)
+        nb, nv = tree.parent.size, tree.reflected_inertia.size
+        gains = np.ravel(gains).astype(float)
+        if gains.size != 17 + 2 * (nv - 6):
+            raise ValueError(f"{gains.size} gains for {nv} velocities: see pack_gains")
+        floats, ints = _pack_tree(tree)
+        # The law's parameters after the tree, in the order _unpack_law reads them.
+        self._model = np.concatenate([floats, np.ravel(R_BE), np.ravel(p_BE), gains,
+                                      [sigma_min_J3_limit, f_d_limit]]).astype(float)
+        self._index = np.concatenate([ints, [num_positions, body, q3_position_index,
+                                             q3_velocity_index]]).astype(np.int64)
+        self._work = np.zeros(_workspace_size(nb, nv, True))
+        self._nq, self._nv = int(num_positions), nv
+        self._compile()
 
-    def _compile(self, tree: KinematicTree) -> None:
+    def _compile(self) -> None:
         """Compile (or load from numba's cache) now, at construction, rather than in the
         middle of the first simulation step: one evaluation at rest, outputs discarded."""
         if _law.signatures:
@@ -921,15 +1372,15 @@ class CompiledLaw:
             print("aerial_drake: compiling the control law with numba (first use after "
                   "installing; about a minute, cached afterwards) ...", file=sys.stderr,
                   flush=True)
-        nv = tree.reflected_inertia.size
-        x = np.zeros(self._nq + nv)
+        x = np.zeros(self._nq + self._nv)
         x[0] = 1.0  # unit quaternion, all else zero
         com, task = np.zeros(COM_REFERENCE_SIZE), np.zeros(TASK_REFERENCE_SIZE)
         heading = np.zeros(HEADING_REFERENCE_SIZE)
         unpack_task_reference(task).R_ed[:] = np.eye(3)  # views into the vectors
         unpack_heading_reference(heading)[0, 0] = 1.0  # b1d = e_x
-        self(x, com, task, heading, np.empty(4 + nv - 6), np.empty(DIAGNOSTICS_SIZE))
+        self(x, com, task, heading, np.empty(4 + self._nv - 6), np.empty(DIAGNOSTICS_SIZE))
 
     def __call__(self, x: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
                  command: np.ndarray, diagnostics: np.ndarray) -> tuple[int, float, float]:
-        return _law(x, self._nq, com, task, heading, *self._args, command, diagnostics)
+        return _law(x, com, task, heading, command, diagnostics, self._model, self._index,
+                    self._work)
