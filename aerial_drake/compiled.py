@@ -169,9 +169,8 @@ def _unpack_tree(model, index):
 
 
 #: Section II's quantities and scratch space (see :func:`_section2_buffers`).
-_SectionII = namedtuple("_SectionII", "R_all p_all axis_W origin_W frames J J_dot M C M_dot J_g "
-                                      "J_g_dot p_WG V A products T T_dot T_inv T_LU Z "
-                                      "ZZ")
+_SectionII = namedtuple("_SectionII", "R_all p_all axis_W origin_W frames J J_dot sums M C M_dot "
+                                      "J_g J_g_dot p_WG V A products T T_dot T_inv T_LU Z ZZ")
 
 
 @_jit
@@ -187,15 +186,17 @@ def _section2_buffers(work, at, nb, nv):
     # only: zero elsewhere from the workspace's allocation, as the tree fixes those columns.
     J, at = _mats(work, at, nb, 6, nv)
     J_dot, at = _mats(work, at, nb, 6, nv)
-    M, at = _mat(work, at, nv, nv)
-    C, at = _mat(work, at, nv, nv)
+    # The body sums, side by side so that they are zeroed at once.
+    sums, at = _vec(work, at, 2 * nv * nv + 6 * nv + 3)
+    M, k = _mat(sums, 0, nv, nv)
+    C, k = _mat(sums, k, nv, nv)
+    J_g, k = _mat(sums, k, 3, nv)
+    J_g_dot, k = _mat(sums, k, 3, nv)
+    p_WG, k = _vec(sums, k, 3)
     M_dot, at = _mat(work, at, nv, nv)
-    J_g, at = _mat(work, at, 3, nv)
-    J_g_dot, at = _mat(work, at, 3, nv)
-    p_WG, at = _vec(work, at, 3)
     V, at = _mat(work, at, 2, 6)  # a body's spatial velocity and a 6-vector of scratch
     A, at = _mat(work, at, 6, 6)
-    # I J and the Coriolis product I J_dot + A J / 2 of a body, then rows of J^T times them
+    # I J and the Coriolis product I J_dot + A J / 2 of a body, and a row of J^T I J
     products, at = _mats(work, at, 3, 6, nv)
     T, at = _mat(work, at, nv, nv)
     T_dot, at = _mat(work, at, nv, nv)
@@ -203,7 +204,7 @@ def _section2_buffers(work, at, nb, nv):
     T_LU, at = _mat(work, at, nv, nv)
     Z, at = _mats(work, at, 3, n, nv)  # Z M, Z_dot M, Z M_dot
     ZZ, at = _mats(work, at, 5, n, n)  # Z M Z^T, its factorisation and three products
-    return (_SectionII(R_all, p_all, axis_W, origin_W, frames, J, J_dot, M, C, M_dot, J_g,
+    return (_SectionII(R_all, p_all, axis_W, origin_W, frames, J, J_dot, sums, M, C, M_dot, J_g,
                        J_g_dot, p_WG, V, A, products, T, T_dot, T_inv, T_LU, Z, ZZ),
             at)
 
@@ -683,10 +684,7 @@ def _body_sums(v, tree, s):
             base = b
 
     M, C, J_g, J_g_dot, p_WG = s.M, s.C, s.J_g, s.J_g_dot, s.p_WG
-    for X in (M, C, J_g, J_g_dot):
-        _zero(X)
-    for r in range(3):
-        p_WG[r] = 0.0
+    s.sums[:] = 0.0
     Vb, work, A = s.V[0], s.V[1], s.A
     # The products of body b's mass and Coriolis terms with its Jacobian, over the columns up to
     # its last nonzero one (the others are zero): the loops over columns run over contiguous
@@ -694,13 +692,13 @@ def _body_sums(v, tree, s):
     IJ, inner, row_m = s.products[0], s.products[1], s.products[2, 0]
     for b in range(nb):
         Jb, J_dot = s.J[b], s.J_dot[b]
-        _mv_into(Jb, v, Vb)
+        width = tree.width[b]
+        _mv_into(Jb, v[:width], Vb)  # (the columns from width on are zero)
         nc = tree.num_cols[b]
         cols = tree.cols[b, :nc]
         _jacobian_derivative(Jb, Vb, v, s.R_all[b], cols, J_dot, work)
         if mass[b] == 0.0:
             continue
-        width = tree.width[b]
         # M += J^T I J, C += J^T (I J_dot + 1/2 A J) (design notes, section 3).
         I = tree.inertia[b]
         _coriolis_kernel(I, Vb, A)
