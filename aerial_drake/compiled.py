@@ -33,7 +33,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit, types
 from numba.core import cgutils
-from numba.core.imputils import impl_ret_borrowed
+from numba.core.imputils import impl_ret_untracked
 from numba.extending import intrinsic
 from numba.np.arrayobj import make_array, populate_array
 
@@ -86,7 +86,7 @@ def _view(typingctx, buf, at, shape):
         view = make_array(sig.return_type)(context, builder)
         populate_array(view, data=builder.gep(src.data, [start]), shape=dims, strides=strides,
                        itemsize=src.itemsize, meminfo=None)
-        return impl_ret_borrowed(context, builder, sig.return_type, view._getvalue())
+        return impl_ret_untracked(context, builder, sig.return_type, view._getvalue())
 
     return types.Array(buf.dtype, len(shape), "C")(buf, at, shape), codegen
 
@@ -173,7 +173,7 @@ _SectionII = namedtuple("_SectionII", "R_all p_all axis_W origin_W frames J J_do
                                       "J_g J_g_dot p_WG V A products T T_dot T_inv T_LU Z ZZ")
 
 
-@_jit
+@_inline
 def _section2_buffers(work, at, nb, nv):
     """Section II's buffers in ``work`` from offset ``at``, and the offset after them."""
     n = nv - 6
@@ -834,7 +834,7 @@ def _transformation(v, R, s):
     _inv_into(T, s.T_LU, s.T_inv)
 
 
-@_jit
+@_inline
 def _section2(q, v, tree, s):
     """Kinematics, the body sums and the transformation (3)-(4) at ``(q, v)``, into ``s``.
     Returns the total mass and the base body's index."""
@@ -1008,7 +1008,7 @@ _LawBuffers = namedtuple(
                    "u vn vnv u_prime F force_b")
 
 
-@_jit
+@_inline
 def _law_buffers(work, nb, nv):
     """Section II's and the law's buffers in ``work``, and the size they take."""
     n = nv - 6
