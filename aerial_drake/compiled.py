@@ -21,6 +21,9 @@ The only entry points are :class:`CompiledLaw` and :func:`decompose`; the kernel
 numba compiles them on first use and caches the machine code next to this file (``cache=True``),
 so only the first run after installing pays the compile time (about a minute on a 2-core
 machine; a note on stderr says so); later processes load the machine code in under a second.
+That compile's memory grows with the LLVM IR numba generates, much of it from two constructs the
+kernels therefore avoid: array-to-array slice assignment (see :func:`_copy`) and numba-level
+inlining of the functions that build the tuples of views (see ``_forceinline``).
 """
 
 from __future__ import annotations
@@ -49,6 +52,11 @@ _jit = njit(cache=True, nogil=True, error_model="numpy")
 # For the few-line kernels called in inner loops: a call passes each array as its whole
 # descriptor, which costs more than these kernels' own work; numba inlines them instead.
 _inline = njit(cache=True, nogil=True, error_model="numpy", inline="always")
+# For the functions that build the tuples of views: inline="always" would copy their tuple
+# handling into the caller's IR, where numba writes out each reference count of each view
+# field by field (most of the law kernel's IR, and of the compile's peak memory). Compiled once
+# and inlined by LLVM instead, they still leave it the views' null meminfos to fold away.
+_forceinline = njit(cache=True, nogil=True, error_model="numpy", forceinline=True)
 
 #: Status codes of the law kernel.
 OK, ASSUMPTION_2, ASSUMPTION_1, NONFINITE = 0, 1, 2, 3
@@ -91,20 +99,21 @@ def _view(typingctx, buf, at, shape):
     return types.Array(buf.dtype, len(shape), "C")(buf, at, shape), codegen
 
 
-@_jit
+@_inline
 def _vec(buf, at, size):
     """The ``size`` entries of the flat ``buf`` from offset ``at`` (a :func:`_view`), and the
-    offset after them."""
+    offset after them. (Inlined: compiled apart, these three took a compile per signature, some
+    thirty.)"""
     return _view(buf, at, (size,)), at + size
 
 
-@_jit
+@_inline
 def _mat(buf, at, rows, cols):
     """As :func:`_vec`, a rows x cols matrix."""
     return _view(buf, at, (rows, cols)), at + rows * cols
 
 
-@_jit
+@_inline
 def _mats(buf, at, count, rows, cols):
     """As :func:`_vec`, ``count`` rows x cols matrices."""
     return _view(buf, at, (count, rows, cols)), at + count * rows * cols
@@ -173,7 +182,7 @@ _SectionII = namedtuple("_SectionII", "R_all p_all axis_W origin_W frames J J_do
                                       "J_g J_g_dot p_WG V A products T T_dot T_inv T_LU Z ZZ")
 
 
-@_inline
+@_forceinline
 def _section2_buffers(work, at, nb, nv):
     """Section II's buffers in ``work`` from offset ``at``, and the offset after them."""
     n = nv - 6
@@ -316,6 +325,22 @@ def _zero(A):
             A[i, j] = 0.0
 
 
+@_inline
+def _copy(A, out):
+    """out = A for matrices: a loop, where numba's ``out[:, :] = A`` (which checks the two for
+    overlap and broadcasts) generates some fifteen times its LLVM IR."""
+    for i in range(A.shape[0]):
+        for j in range(A.shape[1]):
+            out[i, j] = A[i, j]
+
+
+@_inline
+def _copy_vec(a, out):
+    """out = a for vectors (see _copy)."""
+    for i in range(a.shape[0]):
+        out[i] = a[i]
+
+
 @_jit
 def _set_identity(A):
     for i in range(A.shape[0]):
@@ -364,7 +389,7 @@ def _solve_into(A, B):
 @_jit
 def _inv_into(A, work, out):
     """out = A^-1 (``work``: scratch of A's shape)."""
-    work[:, :] = A
+    _copy(A, work)
     _set_identity(out)
     _solve_into(work, out)
 
@@ -518,8 +543,8 @@ def _kinematics(q, tree, s):
     for b in range(parent.shape[0]):
         P = parent[b]
         if P < 0:
-            R_WF[:, :] = tree.R_PF[b]
-            p_WF[:] = tree.p_PF[b]
+            _copy(tree.R_PF[b], R_WF)
+            _copy_vec(tree.p_PF[b], p_WF)
         else:
             _mm3_into(R_all[P], tree.R_PF[b], R_WF)
             _affine_into(p_all[P], R_all[P], tree.p_PF[b], p_WF)
@@ -531,13 +556,13 @@ def _kinematics(q, tree, s):
         elif joint_type[b] == REVOLUTE:
             _axis_angle_matrix_into(axis_F[b], q[i], R_FM)
             _mm3_into(R_WF, R_FM, R_WM)
-            origin_W[b] = p_WF
+            _copy_vec(p_WF, origin_W[b])
             a = axis_F[b]
             for r in range(3):
                 axis_W[b, r] = R_WF[r, 0] * a[0] + R_WF[r, 1] * a[1] + R_WF[r, 2] * a[2]
         else:
-            R_WM[:, :] = R_WF
-            origin_W[b] = p_WF
+            _copy(R_WF, R_WM)
+            _copy_vec(p_WF, origin_W[b])
         _mm3_into(R_WM, tree.R_MC[b], R_all[b])
         _affine_into(origin_W[b], R_WM, tree.p_MC[b], p_all[b])
 
@@ -788,7 +813,8 @@ def _transformation(v, R, s):
     """T of (3) with N of (4) as its last rows, its derivative (N_dot last), and T^-1, into
     ``s.T``, ``s.T_dot``, ``s.T_inv``."""
     T, T_dot, J_g, J_g_dot = s.T, s.T_dot, s.J_g, s.J_g_dot
-    T[:3], T_dot[:3] = J_g, J_g_dot
+    _copy(J_g, T[:3])
+    _copy(J_g_dot, T_dot[:3])
     # J_bw = [R^T, 0, 0], J_bw_dot = [-hat(R^T w) R^T, 0, 0] (w = v[:3] in World).
     J_bw, J_bw_dot = T[3:6], T_dot[3:6]
     _zero(J_bw)
@@ -807,8 +833,8 @@ def _transformation(v, R, s):
     N, N_dot = T[6:], T_dot[6:]
     _z_times_into(J_g, s.M, True, ZM)
     _times_zt_into(ZM, J_g, True, ZMZ)
-    LU[:, :] = ZMZ
-    N[:, :] = ZM
+    _copy(ZMZ, LU)
+    _copy(ZM, N)
     _solve_into(LU, N)  # (4)
     _z_times_into(J_g_dot, s.M, False, ZdM)
     M_dot = s.M_dot
@@ -829,7 +855,7 @@ def _transformation(v, R, s):
             if f != 0.0:
                 for j in range(N.shape[1]):
                     N_dot[i, j] -= f * N[k, j]
-    LU[:, :] = ZMZ
+    _copy(ZMZ, LU)
     _solve_into(LU, N_dot)
     _inv_into(T, s.T_LU, s.T_inv)
 
@@ -1008,7 +1034,7 @@ _LawBuffers = namedtuple(
                    "u vn vnv u_prime F force_b")
 
 
-@_inline
+@_forceinline
 def _law_buffers(work, nb, nv):
     """Section II's and the law's buffers in ``work``, and the size they take."""
     n = nv - 6
@@ -1192,7 +1218,7 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
     # Task control (17)-(20).
     Jt, J3 = w.Jt, w.J3
     _mm_into(J_y, T_inv, Jt)
-    J3[:, :] = Jt[:, 6:]
+    _copy(Jt[:, 6:], J3)
     _mtm_into(J3, J3, w.JtJ)
     sigma_min = math.sqrt(max(_min_eigenvalue_sym(w.JtJ, w.vn[13:17]), 0.0))
     if not sigma_min > p.limits[0]:
@@ -1216,7 +1242,8 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
         z_d[i] = y_d_dot[i] - Jx12[i] - K_y[i] * y_t[i]
         z_t[i] = z[i] - z_d[i]  # (18)
     a12 = w.a12  # [xg_dd; w_b_dot]
-    a12[:3], a12[3:] = xg_dd, w_b_dot
+    for i in range(3):
+        a12[i], a12[3 + i] = xg_dd[i], w_b_dot[i]
     _mv_into(Jt, a12, Ja12)
     u_x12 = w.u[1]
     _mv_into(T_inv, xi[:6], u_x12)
