@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -60,6 +61,39 @@ def _print_summary(result) -> None:
         print(f"wrote {result.out_dir / 'log.npz'} and {result.out_dir / 'metrics.json'}")
 
 
+# Set in the restarted process, so that it never restarts again.
+_RESTARTED = "AERIAL_DRAKE_RESTARTED_AFTER_COMPILE"
+
+
+def _compile_first(args: argparse.Namespace) -> None:
+    """On the first run after installing, compile the numba kernels, then restart the command.
+
+    numba keeps what compiling the control law allocated (about 200 MB) for the rest of the
+    process: compiled in the middle of a run, it stays under everything the run allocates
+    after it, and that first run peaked near 600 MB against 300-400 MB for every later one
+    (docs/performance.md, Memory). So the command compiles first, before the run builds
+    anything, and re-executes itself (same arguments, same process id); the run proper then
+    loads the cached machine code like any later run. Nothing to do when the cache is warm,
+    when :func:`main` was called from Python (``args.argv is None``: never replace a caller's
+    process), or off POSIX; if the cache could not be written, the run goes on here."""
+    if args.argv is None or os.environ.get(_RESTARTED) or os.name != "posix":
+        return
+    from aerial_drake.compiled import law_cache_is_cold
+    from aerial_drake.runner import compile_kernels
+    if not law_cache_is_cold():
+        return
+    print("aerial_drake: compiling the control law with numba (first use after installing; "
+          "about a minute, cached afterwards) ...", file=sys.stderr, flush=True)
+    compile_kernels()
+    if law_cache_is_cold():
+        return
+    print("aerial_drake: compiled and cached; restarting the command to run with the cached "
+          "code", file=sys.stderr, flush=True)
+    sys.stdout.flush()
+    os.environ[_RESTARTED] = "1"
+    os.execv(sys.executable, [sys.executable, "-m", "aerial_drake", *args.argv])
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from aerial_drake.equilibrium import UnreachablePose
     from aerial_drake.runner import SimulationFailed, SimulationInterrupted, run_scenario
@@ -71,6 +105,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
                   "'aerial-drake run nominal --meshcat' or 'run disturbed --meshcat'",
                   file=sys.stderr)
             return 2
+        _compile_first(args)  # before importing matplotlib (the peak is the compile's)
         from aerial_drake.paper import cli_run
         return cli_run(args)
     overrides = {}
@@ -84,6 +119,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     except ScenarioError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
+    _compile_first(args)  # after the scenario's checks, before Meshcat starts
     out = Path(args.out) / scenario.name
     view = None
     if args.meshcat or args.record:  # aerial_drake.visualization
@@ -173,6 +209,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    # The command's own arguments when run as a program (for _compile_first's restart).
+    args.argv = sys.argv[1:] if argv is None else None
     try:
         return args.func(args)
     except KeyboardInterrupt:

@@ -1348,6 +1348,27 @@ def pack_gains(K, gravity: float) -> np.ndarray:
                            K.K_y, K.K_z, [K.gamma1, K.gamma2, gravity]]).astype(float)
 
 
+def law_cache_is_cold() -> bool:
+    """Whether numba's cache holds no compiled law yet (the first use after installing)."""
+    try:
+        return not os.path.exists(_law._cache._cache_file._index_path)
+    except AttributeError:  # numba internals moved: say warm (only notes depend on it)
+        return False
+
+
+# The law's one signature: every argument a C-contiguous 1-D array, float but the index.
+_F64 = types.Array(types.float64, 1, "C")
+_LAW_SIGNATURE = (_F64,) * 7 + (types.Array(types.int64, 1, "C"), _F64)
+
+
+def compile_law() -> None:
+    """Compile the law (and the workspace's size) into numba's cache, or load them from it,
+    without a model: their argument types are the same for every tree
+    (``runner.compile_kernels``; a test holds these signatures to what a run calls)."""
+    _law.compile(_LAW_SIGNATURE)
+    _workspace_size.compile((types.int64, types.int64, types.boolean))
+
+
 class CompiledLaw:
     """The law (10)-(22) on ``tree``, compiled: ``law(x, com, task, heading, command,
     diagnostics)`` fills the two output arrays and returns ``(status, f_d_norm, sigma_min)``
@@ -1389,11 +1410,7 @@ class CompiledLaw:
         middle of the first simulation step: one evaluation at rest, outputs discarded."""
         if _law.signatures:
             return
-        try:
-            cold = not os.path.exists(_law._cache._cache_file._index_path)
-        except AttributeError:  # numba internals moved; the note is only a courtesy
-            cold = False
-        if cold:
+        if law_cache_is_cold():
             print("aerial_drake: compiling the control law with numba (first use after "
                   "installing; about a minute, cached afterwards) ...", file=sys.stderr,
                   flush=True)

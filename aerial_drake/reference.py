@@ -507,6 +507,15 @@ def _fill_reference_over_time(k: np.ndarray, times: np.ndarray, out: np.ndarray)
         _fill_reference(k, times[i], out[i])
 
 
+def compile_reference() -> None:
+    """Compile the reference kernels into numba's cache, or load them from it, for the
+    argument types a run passes (``runner.compile_kernels``)."""
+    vector = numba.types.Array(numba.types.float64, 1, "C")
+    _fill_reference.compile((vector, numba.types.float64, vector))
+    _fill_reference_over_time.compile(
+        (vector, vector, numba.types.Array(numba.types.float64, 2, "C")))
+
+
 class _PackedReference(LeafSystem):
     """The concatenation [com, task, heading] (51) at the context time: one output, so one
     Python call per time; :class:`ReferenceGenerator` splits it in C++."""

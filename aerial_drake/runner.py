@@ -17,6 +17,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.framework import Context
 from pydrake.systems.primitives import VectorLogSink
 
+from aerial_drake.compiled import compile_law
 from aerial_drake.control import (
     DIAGNOSTICS_LAYOUT, AssumptionViolation, desired_attitude, desired_force)
 from aerial_drake.diagram import ClosedLoop, build_simulation, input_limits
@@ -25,7 +26,7 @@ from aerial_drake.metrics import (
     compute_metrics, disturbance_response, limits_by_input, phase_edges, rotor_metrics)
 from aerial_drake.models import (
     ROTOR_DIRECTIONS, AerialManipulator, nominal_end_effector_offset)
-from aerial_drake.reference import evaluate_reference, sample_reference
+from aerial_drake.reference import compile_reference, evaluate_reference, sample_reference
 from aerial_drake.scenarios import Scenario, ScenarioError
 
 
@@ -267,6 +268,15 @@ def _cut_at_divergence(arrays: dict[str, np.ndarray], index: int,
     arrays = {k: v[:index + 1] for k, v in arrays.items()}
     t = float(arrays["t"][index])
     return arrays, t, f"t = {t:.4f} s: the plant state became non-finite (diverged)"
+
+
+def compile_kernels() -> None:
+    """Compile, or load from numba's cache, every numba kernel a run calls from Python: the
+    control law and the reference's. From their argument types alone, so before any model
+    is built; the command line calls this on the first run after installing and then
+    restarts itself (``aerial_drake.cli``)."""
+    compile_reference()
+    compile_law()
 
 
 def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,

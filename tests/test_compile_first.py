@@ -1,0 +1,112 @@
+"""The first run after installing: the command line compiles the numba kernels before the run
+and restarts itself (aerial_drake.cli._compile_first), so that compile's memory is not under
+the run. Here: runner.compile_kernels compiles every kernel a run calls from Python (nothing
+is left to compile during the run), and when the command restarts and when it does not."""
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from aerial_drake import cli
+
+# In a fresh process: compile_kernels, then a short closed-loop run; print every numba
+# dispatcher of the package's kernel modules that gained a signature during the run.
+_RUN_AFTER_COMPILE = """
+import json
+from numba.core.registry import CPUDispatcher
+from aerial_drake import compiled, reference
+from aerial_drake.runner import compile_kernels, run_scenario
+from aerial_drake.scenarios import load_scenario
+
+def signatures():
+    return {f"{m.__name__}.{name}": [str(s) for s in obj.signatures]
+            for m in (compiled, reference) for name, obj in vars(m).items()
+            if isinstance(obj, CPUDispatcher)}
+
+compile_kernels()
+before = signatures()
+for name in ("nominal", "disturbed"):
+    run_scenario(load_scenario(name, overrides={"duration": 0.01}), progress=False)
+after = signatures()
+print(json.dumps({k: sorted(set(v) - set(before[k])) for k, v in after.items()
+                  if set(v) - set(before[k])}))
+"""
+
+
+def test_compile_kernels_leaves_nothing_to_compile_in_a_run():
+    done = subprocess.run([sys.executable, "-c", _RUN_AFTER_COMPILE], capture_output=True,
+                          text=True, timeout=900)
+    assert done.returncode == 0, done.stderr[-3000:]
+    compiled_in_run = json.loads(done.stdout.strip().splitlines()[-1])
+    assert compiled_in_run == {}, (
+        f"kernels compiled during the run, not by compile_kernels: {compiled_in_run}")
+
+
+class _Restart(Exception):
+    pass
+
+
+@pytest.fixture
+def first_run(monkeypatch):
+    """_compile_first with the cache reported cold, compiling and exec recorded, not done."""
+    calls = {"compiled": 0, "execv": None}
+    cold = {"before": True, "after": False}
+
+    def law_cache_is_cold():
+        return cold["before"] if calls["compiled"] == 0 else cold["after"]
+
+    def compile_kernels():
+        calls["compiled"] += 1
+
+    def execv(path, argv):
+        calls["execv"] = (path, argv)
+        raise _Restart
+
+    monkeypatch.setattr("aerial_drake.compiled.law_cache_is_cold", law_cache_is_cold)
+    monkeypatch.setattr("aerial_drake.runner.compile_kernels", compile_kernels)
+    monkeypatch.setattr(os, "execv", execv)
+    monkeypatch.delenv(cli._RESTARTED, raising=False)
+    return calls, cold
+
+
+def _args(argv):
+    return argparse.Namespace(argv=argv)
+
+
+def test_cold_cache_compiles_then_restarts_with_the_same_arguments(first_run):
+    calls, _ = first_run
+    with pytest.raises(_Restart):
+        cli._compile_first(_args(["run", "paper", "--out", "x"]))
+    assert calls["compiled"] == 1
+    assert calls["execv"] == (sys.executable,
+                              [sys.executable, "-m", "aerial_drake", "run", "paper", "--out", "x"])
+    assert os.environ[cli._RESTARTED] == "1"  # the restarted process will not restart
+
+
+@pytest.mark.parametrize("case", ["warm", "called from python", "restarted", "cache not written"])
+def test_no_restart(first_run, monkeypatch, case):
+    calls, cold = first_run
+    argv = ["run", "nominal"]
+    if case == "warm":
+        cold["before"] = False
+    elif case == "called from python":
+        argv = None  # cli.main(argv): never replace the caller's process
+    elif case == "restarted":
+        monkeypatch.setenv(cli._RESTARTED, "1")
+    else:
+        cold["after"] = True
+    cli._compile_first(_args(argv))
+    assert calls["execv"] is None
+    assert calls["compiled"] == (1 if case == "cache not written" else 0)
+
+
+def test_main_from_python_does_not_restart(monkeypatch):
+    seen = {}
+    monkeypatch.setattr(cli, "_cmd_info", lambda args: seen.setdefault("argv", args.argv) or 0)
+    monkeypatch.setattr(sys, "argv", ["aerial-drake", "info"])
+    cli.main(["info"])
+    assert seen["argv"] is None
