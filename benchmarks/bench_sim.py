@@ -4,7 +4,9 @@ For each scenario: median wall time over --repeats runs, real-time factor (simul
 median control-law evaluation time (the controller replayed on the run's logged states), the
 same diagram with a zero controller (plant, reference and logging only) timed in the same
 session, their ratio, and the peak resident memory of one run. Each run is its own process,
-so the memory figure is that run's.
+so the memory figure is that run's. The numba kernels are compiled (or loaded) first, in a
+process of their own, so every timed run is one with numba's cache filled; the first run
+after installing is measured apart (docs/performance.md, Memory).
 
     python benchmarks/bench_sim.py [--repeats 3] [--duration 15] [--scenarios nominal disturbed]
 """
@@ -81,6 +83,8 @@ def main() -> None:
           f"{platform.python_version()}, {len(__import__('os').sched_getaffinity(0))} cores")
     header = (f"{'scenario':>10} {'wall (s)':>9} {'RT factor':>10} {'ctrl (us)':>10} "
               f"{'zero-ctrl wall':>15} {'ratio':>6} {'peak RSS (MB)':>14}")
+    subprocess.run([sys.executable, "-c", "from aerial_drake.runner import compile_kernels; "
+                    "compile_kernels()"], check=True)
     print(header)
     for name in args.scenarios:
         # Alternating, so that both medians see the same drift of the machine's speed.
