@@ -72,11 +72,12 @@ def _compile_first(args: argparse.Namespace) -> None:
     process: compiled in the middle of a run, it stays under everything the run allocates
     after it, and that first run peaked near 600 MB against 300-400 MB for every later one
     (docs/performance.md, Memory). So the command compiles first, before the run builds
-    anything, and re-executes itself (same arguments, same process id); the run proper then
-    loads the cached machine code like any later run. Nothing to do when the cache is warm,
-    when :func:`main` was called from Python (``args.argv is None``: never replace a caller's
-    process), or off POSIX; if the cache could not be written, the run goes on here."""
-    if args.argv is None or os.environ.get(_RESTARTED) or os.name != "posix":
+    anything, and re-executes itself exactly as it was started (``sys.orig_argv``: the same
+    script or ``-m``, so the same installed package and cache; same process id); the run
+    proper then loads the cached machine code like any later run. Nothing to do when the
+    cache is warm, when :func:`main` was called from Python with arguments (never replace a
+    caller's process), or off POSIX; if the cache could not be written, the run goes on here."""
+    if not args.restartable or os.environ.get(_RESTARTED) or os.name != "posix":
         return
     from aerial_drake.compiled import law_cache_is_cold
     from aerial_drake.runner import compile_kernels
@@ -91,7 +92,7 @@ def _compile_first(args: argparse.Namespace) -> None:
           "code", file=sys.stderr, flush=True)
     sys.stdout.flush()
     os.environ[_RESTARTED] = "1"
-    os.execv(sys.executable, [sys.executable, "-m", "aerial_drake", *args.argv])
+    os.execv(sys.executable, [sys.executable, *sys.orig_argv[1:]])
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -209,8 +210,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    # The command's own arguments when run as a program (for _compile_first's restart).
-    args.argv = sys.argv[1:] if argv is None else None
+    # Run as a program (its arguments from the command line): _compile_first may restart it.
+    args.restartable = argv is None
     try:
         return args.func(args)
     except KeyboardInterrupt:

@@ -73,40 +73,44 @@ def first_run(monkeypatch):
     return calls, cold
 
 
-def _args(argv):
-    return argparse.Namespace(argv=argv)
+def _args(restartable=True):
+    return argparse.Namespace(restartable=restartable)
 
 
-def test_cold_cache_compiles_then_restarts_with_the_same_arguments(first_run):
+def test_cold_cache_compiles_then_restarts_as_it_was_started(first_run, monkeypatch):
     calls, _ = first_run
+    # As the console script starts it: the restart must run the same script (the same
+    # installed package and cache), not "-m aerial_drake", which a source tree in the working
+    # directory would shadow.
+    monkeypatch.setattr(sys, "orig_argv", ["python3", "/venv/bin/aerial-drake", "run", "paper"])
     with pytest.raises(_Restart):
-        cli._compile_first(_args(["run", "paper", "--out", "x"]))
+        cli._compile_first(_args())
     assert calls["compiled"] == 1
     assert calls["execv"] == (sys.executable,
-                              [sys.executable, "-m", "aerial_drake", "run", "paper", "--out", "x"])
+                              [sys.executable, "/venv/bin/aerial-drake", "run", "paper"])
     assert os.environ[cli._RESTARTED] == "1"  # the restarted process will not restart
 
 
 @pytest.mark.parametrize("case", ["warm", "called from python", "restarted", "cache not written"])
 def test_no_restart(first_run, monkeypatch, case):
     calls, cold = first_run
-    argv = ["run", "nominal"]
+    restartable = True
     if case == "warm":
         cold["before"] = False
     elif case == "called from python":
-        argv = None  # cli.main(argv): never replace the caller's process
+        restartable = False  # cli.main(argv): never replace the caller's process
     elif case == "restarted":
         monkeypatch.setenv(cli._RESTARTED, "1")
     else:
         cold["after"] = True
-    cli._compile_first(_args(argv))
+    cli._compile_first(_args(restartable))
     assert calls["execv"] is None
     assert calls["compiled"] == (1 if case == "cache not written" else 0)
 
 
 def test_main_from_python_does_not_restart(monkeypatch):
     seen = {}
-    monkeypatch.setattr(cli, "_cmd_info", lambda args: seen.setdefault("argv", args.argv) or 0)
-    monkeypatch.setattr(sys, "argv", ["aerial-drake", "info"])
+    monkeypatch.setattr(cli, "_cmd_info", lambda args: seen.setdefault("restart", args.restartable)
+                        and 0)
     cli.main(["info"])
-    assert seen["argv"] is None
+    assert seen["restart"] is False
