@@ -83,9 +83,7 @@ def _compile_first(args: argparse.Namespace) -> None:
     from aerial_drake.runner import compile_kernels
     if not law_cache_is_cold():
         return
-    print("aerial_drake: compiling the control law with numba (first use after installing; "
-          "about a minute, cached afterwards) ...", file=sys.stderr, flush=True)
-    compile_kernels()
+    compile_kernels()  # says on stderr that it compiles
     if law_cache_is_cold():
         return
     print("aerial_drake: compiled and cached; restarting the command to run with the cached "

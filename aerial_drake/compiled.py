@@ -17,7 +17,9 @@ construction and keeps one float workspace, which the kernels see as named views
 every call) and none to allocate or free. The law applies Lambda, Gamma and T^-1 to vectors
 only, through the columns of T^-1 that the vectors' nonzero entries meet.
 
-The only entry points are :class:`CompiledLaw` and :func:`decompose`; the kernels are private.
+The entry points are :class:`CompiledLaw`, :func:`decompose`, and :func:`compile_law` with
+:func:`law_cache_is_cold` (for compiling before a run: ``runner.compile_kernels``); the kernels
+are private.
 numba compiles them on first use and caches the machine code next to this file (``cache=True``),
 so only the first run after installing pays the compile time (about a minute on a 2-core
 machine; a note on stderr says so); later processes load the machine code in under a second.
@@ -1352,8 +1354,16 @@ def law_cache_is_cold() -> bool:
     """Whether numba's cache holds no compiled law yet (the first use after installing)."""
     try:
         return not os.path.exists(_law._cache._cache_file._index_path)
-    except AttributeError:  # numba internals moved: say warm (only notes depend on it)
+    except AttributeError:  # numba internals moved: say warm (no note, no restart)
         return False
+
+
+def _note_if_cold() -> None:
+    """Say on stderr that the law is about to compile, if numba's cache is cold."""
+    if law_cache_is_cold():
+        print("aerial_drake: compiling the control law with numba (first use after "
+              "installing; about a minute, cached afterwards) ...", file=sys.stderr,
+              flush=True)
 
 
 # The law's one signature: every argument a C-contiguous 1-D array, float but the index.
@@ -1365,6 +1375,7 @@ def compile_law() -> None:
     """Compile the law (and the workspace's size) into numba's cache, or load them from it,
     without a model: their argument types are the same for every tree
     (``runner.compile_kernels``; a test holds these signatures to what a run calls)."""
+    _note_if_cold()
     _law.compile(_LAW_SIGNATURE)
     _workspace_size.compile((types.int64, types.int64, types.boolean))
 
@@ -1410,10 +1421,7 @@ class CompiledLaw:
         middle of the first simulation step: one evaluation at rest, outputs discarded."""
         if _law.signatures:
             return
-        if law_cache_is_cold():
-            print("aerial_drake: compiling the control law with numba (first use after "
-                  "installing; about a minute, cached afterwards) ...", file=sys.stderr,
-                  flush=True)
+        _note_if_cold()
         x = np.zeros(self._nq + self._nv)
         x[0] = 1.0  # unit quaternion, all else zero
         com, task = np.zeros(COM_REFERENCE_SIZE), np.zeros(TASK_REFERENCE_SIZE)

@@ -275,8 +275,8 @@ def compile_kernels() -> None:
     control law and the reference's. From their argument types alone, so before any model
     is built; the command line calls this on the first run after installing and then
     restarts itself (``aerial_drake.cli``)."""
-    compile_reference()
     compile_law()
+    compile_reference()
 
 
 def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
