@@ -15,8 +15,8 @@ import numpy as np
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    from aerial_drake.models import PLANT_VARIANTS, make_plant
-    from aerial_drake.scenarios import shipped_scenarios
+    from aerial_drake.robots.models import PLANT_VARIANTS, make_plant
+    from aerial_drake.simulation.scenarios import shipped_scenarios
 
     for variant in PLANT_VARIANTS:
         manip = make_plant(variant)
@@ -79,8 +79,8 @@ def _compile_first(args: argparse.Namespace) -> None:
     caller's process), or off POSIX; if the cache could not be written, the run goes on here."""
     if not args.restartable or os.environ.get(_RESTARTED) or os.name != "posix":
         return
-    from aerial_drake.compiled import law_cache_is_cold
-    from aerial_drake.runner import compile_kernels
+    from aerial_drake.control.compiled import law_cache_is_cold
+    from aerial_drake.simulation.runner import compile_kernels
     if not law_cache_is_cold():
         return
     compile_kernels()  # says on stderr that it compiles
@@ -94,18 +94,18 @@ def _compile_first(args: argparse.Namespace) -> None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from aerial_drake.equilibrium import UnreachablePose
-    from aerial_drake.runner import SimulationFailed, SimulationInterrupted, run_scenario
-    from aerial_drake.scenarios import ScenarioError, load_scenario
+    from aerial_drake.dynamics.equilibrium import UnreachablePose
+    from aerial_drake.simulation.runner import SimulationFailed, SimulationInterrupted, run_scenario
+    from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
 
-    if args.scenario == "paper":  # both of Section IV's runs and Figs. 3-6 (aerial_drake.paper)
+    if args.scenario == "paper":  # both of Section IV's runs and Figs. 3-6 (aerial_drake.studies.paper)
         if args.meshcat or args.record or args.realtime_rate is not None:
             print("error: --meshcat, --record and --realtime-rate watch one scenario; use "
                   "'aerial-drake run nominal --meshcat' or 'run disturbed --meshcat'",
                   file=sys.stderr)
             return 2
         _compile_first(args)  # before importing matplotlib (the peak is the compile's)
-        from aerial_drake.paper import cli_run
+        from aerial_drake.studies.paper import cli_run
         return cli_run(args)
     overrides = {}
     if args.duration is not None:
@@ -113,7 +113,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     try:
         scenario = load_scenario(args.scenario, overrides=overrides)
         if args.seed is not None:
-            from aerial_drake.paper import perturb_initial
+            from aerial_drake.studies.paper import perturb_initial
             scenario = perturb_initial(scenario, args.seed)
     except ScenarioError as err:
         print(f"error: {err}", file=sys.stderr)
@@ -121,8 +121,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     _compile_first(args)  # after the scenario's checks, before Meshcat starts
     out = Path(args.out) / scenario.name
     view = None
-    if args.meshcat or args.record:  # aerial_drake.visualization
-        from aerial_drake.visualization import MeshcatPortInUse, MeshcatView
+    if args.meshcat or args.record:  # aerial_drake.viz.meshcat_view
+        from aerial_drake.viz.meshcat_view import MeshcatPortInUse, MeshcatView
         try:
             port = args.meshcat_port
             if port is None and not args.meshcat:
@@ -188,7 +188,7 @@ def build_parser() -> argparse.ArgumentParser:
                           "free port; a busy port is an error)")
     run.add_argument("--seed", type=int, default=None,
                      help="perturb the initial offsets by a reproducible uniform draw from "
-                          "numpy.random.default_rng(SEED) (bounds: aerial_drake.paper."
+                          "numpy.random.default_rng(SEED) (bounds: aerial_drake.studies.paper."
                           "SEED_BOUNDS); without it runs are deterministic")
     run.set_defaults(func=_cmd_run)
     info = sub.add_parser("info", help="print a summary of the models and scenarios")

@@ -1,6 +1,6 @@
 """Median time of one full decomposition (Section II: M, C, g, J_b, Q, J_g, J_bw, Z, N, T,
 T^-1, T_dot, Lambda, Gamma, and the input map) at one state of our model, in microseconds:
-the numpy reference path on Drake's kinematics, and the compiled one (aerial_drake.compiled)
+the numpy reference path on Drake's kinematics, and the compiled one (aerial_drake.control.compiled)
 that the simulation's controller uses, with their ratio.
 
     python benchmarks/bench_decomposition.py [--repeats N]
@@ -15,10 +15,10 @@ import time
 
 import numpy as np
 
-from aerial_drake import compiled
-from aerial_drake.decoupling import DecoupledDynamics
-from aerial_drake.kinematic_tree import KinematicTree
-from aerial_drake.models import make_plant
+from aerial_drake.control import compiled
+from aerial_drake.dynamics.decoupling import DecoupledDynamics
+from aerial_drake.dynamics.kinematic_tree import KinematicTree
+from aerial_drake.robots.models import make_plant
 
 
 def main() -> None:

@@ -1,4 +1,4 @@
-"""Median time of one evaluation of the compiled control law (aerial_drake.compiled), on the
+"""Median time of one evaluation of the compiled control law (aerial_drake.control.compiled), on the
 states and references a short run of a paper scenario visited, in microseconds: the kernel
 alone (``CompiledLaw.__call__``, what the simulation's controller calls at each sample) and
 through ``DecoupledController.evaluate`` (which adds the output arrays and the status checks).
@@ -20,9 +20,9 @@ import numpy as np
 
 def logged_inputs(scenario_name: str, duration: float, rows: int = 300):
     """The controller and ``rows`` (state, com, task, heading) inputs of a run's log."""
-    from aerial_drake.diagram import build_closed_loop
-    from aerial_drake.runner import run_scenario
-    from aerial_drake.scenarios import load_scenario
+    from aerial_drake.simulation.diagram import build_closed_loop
+    from aerial_drake.simulation.runner import run_scenario
+    from aerial_drake.simulation.scenarios import load_scenario
 
     scenario = load_scenario(scenario_name, overrides={"duration": duration})
     log = run_scenario(scenario, progress=False).log

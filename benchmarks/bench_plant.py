@@ -20,8 +20,8 @@ from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
-from aerial_drake.models import add_to_builder
-from aerial_drake.scenarios import load_scenario
+from aerial_drake.robots.models import add_to_builder
+from aerial_drake.simulation.scenarios import load_scenario
 
 #: The scenario whose simulator settings (integrator, step) are used for each plant variant.
 SCENARIOS = {"rigid": "nominal", "rotors": "disturbed"}

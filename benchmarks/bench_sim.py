@@ -26,8 +26,8 @@ import numpy as np
 
 
 def worker(scenario_name: str, duration: float, zero: bool) -> dict:
-    from aerial_drake.runner import run_scenario
-    from aerial_drake.scenarios import load_scenario
+    from aerial_drake.simulation.runner import run_scenario
+    from aerial_drake.simulation.scenarios import load_scenario
 
     scenario = load_scenario(scenario_name, overrides={"duration": duration})
     result = run_scenario(scenario, progress=False, zero_controller=zero)
@@ -42,7 +42,7 @@ def worker(scenario_name: str, duration: float, zero: bool) -> dict:
 def _controller_time(scenario, result, samples: int = 1000) -> float:
     """Median time of one control-law evaluation (``DecoupledController.evaluate``, what the
     simulation's controller runs at each sample) on states the run visited."""
-    from aerial_drake.diagram import build_closed_loop
+    from aerial_drake.simulation.diagram import build_closed_loop
 
     loop = build_closed_loop(scenario)
     ctrl, sim = loop.controller, loop.simulated_plant
@@ -83,7 +83,7 @@ def main() -> None:
           f"{platform.python_version()}, {len(__import__('os').sched_getaffinity(0))} cores")
     header = (f"{'scenario':>10} {'wall (s)':>9} {'RT factor':>10} {'ctrl (us)':>10} "
               f"{'zero-ctrl wall':>15} {'ratio':>6} {'peak RSS (MB)':>14}")
-    subprocess.run([sys.executable, "-c", "from aerial_drake.runner import compile_kernels; "
+    subprocess.run([sys.executable, "-c", "from aerial_drake.simulation.runner import compile_kernels; "
                     "compile_kernels()"], check=True)
     print(header)
     for name in args.scenarios:

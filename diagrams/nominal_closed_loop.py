@@ -11,9 +11,9 @@ from pathlib import Path
 
 from _common import write_graphviz
 
-from aerial_drake.diagram import build_closed_loop
-from aerial_drake.runner import run_scenario
-from aerial_drake.scenarios import load_scenario
+from aerial_drake.simulation.diagram import build_closed_loop
+from aerial_drake.simulation.runner import run_scenario
+from aerial_drake.simulation.scenarios import load_scenario
 
 
 def main() -> None:
@@ -27,7 +27,7 @@ def main() -> None:
 
     # Depth 1: the closed loop's blocks (plant, reference, controller, lag, saturation,
     # actuators) as a Diagram of their own; the run below adds the same systems straight into
-    # the simulation's diagram (aerial_drake.diagram.build_simulation).
+    # the simulation's diagram (aerial_drake.simulation.diagram.build_simulation).
     for path in write_graphviz(build_closed_loop(scenario).diagram,
                                out / f"{scenario.name}_closed_loop"):
         print(f"wrote {path}")

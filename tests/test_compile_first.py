@@ -18,13 +18,14 @@ from aerial_drake import cli
 _RUN_AFTER_COMPILE = """
 import json
 from numba.core.registry import CPUDispatcher
-from aerial_drake import compiled, reference
-from aerial_drake.runner import compile_kernels, run_scenario
-from aerial_drake.scenarios import load_scenario
+from aerial_drake.control.compiled import kernels, kinematics, linalg, views
+from aerial_drake.trajectories import paper
+from aerial_drake.simulation.runner import compile_kernels, run_scenario
+from aerial_drake.simulation.scenarios import load_scenario
 
 def signatures():
     return {f"{m.__name__}.{name}": [str(s) for s in obj.signatures]
-            for m in (compiled, reference) for name, obj in vars(m).items()
+            for m in (views, linalg, kinematics, kernels, paper) for name, obj in vars(m).items()
             if isinstance(obj, CPUDispatcher)}
 
 compile_kernels()
@@ -66,8 +67,8 @@ def first_run(monkeypatch):
         calls["execv"] = (path, argv)
         raise _Restart
 
-    monkeypatch.setattr("aerial_drake.compiled.law_cache_is_cold", law_cache_is_cold)
-    monkeypatch.setattr("aerial_drake.runner.compile_kernels", compile_kernels)
+    monkeypatch.setattr("aerial_drake.control.compiled.law_cache_is_cold", law_cache_is_cold)
+    monkeypatch.setattr("aerial_drake.simulation.runner.compile_kernels", compile_kernels)
     monkeypatch.setattr(os, "execv", execv)
     monkeypatch.delenv(cli._RESTARTED, raising=False)
     return calls, cold

@@ -3,8 +3,8 @@
     python tools/meshcat_screenshots.py [SCENARIO] [--times 0 4.5 9.5] [--out docs/img]
 
 Runs SCENARIO (default: ``disturbed``, the spinning-rotor plant) with the Meshcat view of
-``aerial_drake.visualization``; at each time the simulation pauses while headless Chromium
-(``aerial_drake.screenshot``) photographs the live page, as a browser would show it then.
+``aerial_drake.viz.meshcat_view``; at each time the simulation pauses while headless Chromium
+(``aerial_drake.viz.screenshot``) photographs the live page, as a browser would show it then.
 Writes ``<out>/meshcat_<scenario>_<t>s.png``. Needs Chromium (Debian: apt-get install chromium).
 """
 
@@ -17,10 +17,10 @@ from pathlib import Path
 
 from pydrake.systems.framework import EventStatus, LeafSystem
 
-from aerial_drake.runner import run_scenario
-from aerial_drake.scenarios import load_scenario
-from aerial_drake.screenshot import colourful_fraction, screenshot
-from aerial_drake.visualization import PUBLISH_PERIOD, MeshcatView
+from aerial_drake.simulation.runner import run_scenario
+from aerial_drake.simulation.scenarios import load_scenario
+from aerial_drake.viz.screenshot import colourful_fraction, screenshot
+from aerial_drake.viz.meshcat_view import PUBLISH_PERIOD, MeshcatView
 
 #: The snapshot system checks the times on this grid (s); a multiple of the 1 ms steps.
 TICK = PUBLISH_PERIOD  # shots fall on the overlay's frames

@@ -1,0 +1,171 @@
+"""All of the analysis, written to a folder (:func:`analyze`: ``analysis.json`` and plots),
+its text report, and ``aerial-drake analyze`` (:func:`cli_analyze`)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from aerial_drake.dynamics.equilibrium import UnreachablePose
+from aerial_drake.robots.models import (
+    make_plant)
+from aerial_drake.simulation.scenarios import load_scenario
+from aerial_drake.analysis.settings import AnalysisSettings, FAST_SETTINGS, FULL_SETTINGS
+from aerial_drake.analysis.equilibria import default_equilibria
+from aerial_drake.analysis.linearization import linearize_closed_loop
+from aerial_drake.analysis.controllability import controllability, linearize_open_loop, unactuated_directions
+from aerial_drake.analysis.lyapunov import lee_conditions, lyapunov_study, trajectory_accel_bound
+from aerial_drake.analysis.region_of_attraction import region_of_attraction
+from aerial_drake.analysis.figures import figure_eigenvalues, figure_lyapunov, figure_region_of_attraction
+
+
+# --- Everything, to a folder ----------------------------------------------------------------
+def _nan_to_none(x):
+    """``x`` with every float NaN (also inside numpy arrays) replaced by None."""
+    if isinstance(x, dict):
+        return {k: _nan_to_none(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_nan_to_none(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return _nan_to_none(x.tolist())
+    if isinstance(x, (float, np.floating)) and math.isnan(x):
+        return None
+    return x
+
+
+def _json_default(x):
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    if isinstance(x, (np.floating, np.integer, np.bool_)):
+        return x.item()
+    if isinstance(x, complex):
+        return [x.real, x.imag]
+    raise TypeError(f"not JSON serialisable: {type(x)}")
+
+
+def analyze(out_dir: str | Path = "out/analysis", *, scenario: str = "nominal",
+            settings: AnalysisSettings = FULL_SETTINGS, seed: int = 0,
+            stream=None) -> dict:
+    """Equilibria, linearisations, eigenvalue tables, open-loop controllability, Lee's
+    conditions, the Lyapunov study and the region-of-attraction study (``settings``) of
+    ``scenario``'s gains;
+    writes ``analysis.json``, ``eigenvalues.png``, ``lyapunov.png`` and
+    ``region_of_attraction.png`` to ``out_dir`` and returns the JSON content."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+
+    def say(msg):
+        if stream is not None:
+            stream.write(msg + "\n")
+            stream.flush()
+
+    sc = load_scenario(scenario)
+    report: dict = {"scenario": sc.name, "equilibria": {}}
+    lins = {}
+    for name, eq in default_equilibria().items():
+        say(f"linearising the closed loop at hover '{name}'")
+        lin = linearize_closed_loop(eq, sc.gains)
+        lins[name] = lin
+        open_loop = linearize_open_loop(eq)
+        report["equilibria"][name] = {
+            "closed_loop": lin.summary(),
+            "open_loop": {**controllability(open_loop), "unactuated_generalized_forces":
+                          unactuated_directions(eq, open_loop).round(12).tolist()}}
+        say(f"  max relative eigenvalue mismatch {lin.max_relative_mismatch:.2e}")
+    m = make_plant("rigid").total_mass()
+    report["lee_conditions"] = lee_conditions(sc.gains, m,
+                                              accel_bound=trajectory_accel_bound(sc, m))
+    st = settings
+    say(f"Lyapunov study: {st.lyapunov_duration:g} s, continuous feedback, runge_kutta3 "
+        f"{st.lyapunov_accuracy:g}")
+    lyap = lyapunov_study(sc, duration=st.lyapunov_duration, accuracy=st.lyapunov_accuracy)
+    report["lyapunov"] = lyap.summary()
+    say(f"region of attraction: {len(st.roa_scales)} sizes x {st.roa_samples} runs of "
+        f"{st.roa_duration:g} s")
+    roa = region_of_attraction(sc, scales=st.roa_scales, samples=st.roa_samples,
+                               duration=st.roa_duration, seed=seed)
+    report["region_of_attraction"] = roa.summary()
+    figures = {"eigenvalues.png": figure_eigenvalues(lins), "lyapunov.png": figure_lyapunov(lyap),
+               "region_of_attraction.png": figure_region_of_attraction(roa)}
+    report["figures"] = []
+    for name, fig in figures.items():
+        fig.savefig(out / name, dpi=120)
+        report["figures"].append(name)
+    # JSON has no NaN: undefined numbers are written as null.
+    (out / "analysis.json").write_text(
+        json.dumps(_nan_to_none(report), indent=2, default=_json_default, allow_nan=False))
+    say(f"wrote {out / 'analysis.json'} and {', '.join(figures)}")
+    return report
+
+
+# --- Command line ---------------------------------------------------------------------------
+
+
+def format_eigenvalue_table(rows: list[dict]) -> str:
+    """A :func:`compare_eigenvalues` table as text, slowest first."""
+    lines = [f"{'eigenvalue':<46}{'predicted':>14}{'Linearize':>14}{'rel. err':>10}"]
+    for r in sorted(rows, key=lambda r: -r["computed"][0] if r["predicted"] is None
+                    else -r["predicted"][0]):
+        p = "-" if r["predicted"] is None else f"{r['predicted'][0]:.6f}"
+        c = "-" if r["computed"] is None else f"{r['computed'][0]:.6f}"
+        lines.append(f"{r['label']:<46}{p:>14}{c:>14}{r['relative_mismatch']:10.1e}")
+    return "\n".join(lines)
+
+
+def format_report(report: dict) -> str:
+    """The terminal summary of :func:`analyze`'s result."""
+    lines = []
+    for name, e in report["equilibria"].items():
+        cl, ol = e["closed_loop"], e["open_loop"]
+        eq = cl["equilibrium"]
+        lines.append(f"hover '{name}': CoM {eq['p_WG_m']} m, yaw {eq['yaw_rad']:g} rad, end "
+                     f"effector {np.round(eq['p_WE_m'], 3).tolist()} m, q3 {eq['q3_rad']:g}; "
+                     f"thrust {eq['thrust_N']:.1f} N")
+        lines.append(f"  closed loop: {cl['states']} states, |x_dot| at equilibrium "
+                     f"{cl['derivative_residual']:.1e}, max relative eigenvalue mismatch "
+                     f"{cl['max_relative_mismatch']:.1e}")
+        lines += ["  " + line for line in format_eigenvalue_table(cl["eigenvalues"]).split("\n")]
+        lines.append(f"  open loop: IsStabilizable {ol['IsStabilizable']}, IsControllable "
+                     f"{ol['IsControllable']} (Kalman matrix sigma ratio "
+                     f"{ol['controllability_matrix_conditioning']:.1e}), time-scaled "
+                     f"{ol['IsControllable_time_scaled']}; rank B {ol['rank_B']} of "
+                     f"{ol['states'] // 2} velocities; rank [B .. A^k B]: "
+                     f"{ol['controllability_rank_growth']}")
+    lee = report["lee_conditions"]
+    lines.append(f"Lee et al.: gamma1 = {lee['gamma1']:g} < "
+                 f"{min(lee['gamma1_bounds'].values()):.3g}"
+                 f" {'ok' if lee['gamma1_ok'] else 'VIOLATED'}; gamma2 = {lee['gamma2']:g} < "
+                 f"{min(lee['gamma2_bounds'].values()):.3g} "
+                 f"{'ok' if lee['gamma2_ok'] else 'VIOLATED'} (per axis < "
+                 f"{min(lee['gamma2_per_axis_bounds']):.3g}: "
+                 f"{'ok' if lee['gamma2_per_axis_ok'] else 'VIOLATED'}); coupling condition "
+                 f"{'ok' if lee['coupling_ok'] else 'not met'}")
+    ly = report["lyapunov"]
+    lines.append(f"Lyapunov ({ly['duration_s']:g} s, {ly['integrator']['scheme']} accuracy "
+                 f"{ly['integrator']['accuracy']:g}): V {ly['V']['initial']:.4g} -> "
+                 f"{ly['V']['final']:.4g}, max increase {ly['V']['max_increase']:.2e}; V_task max "
+                 f"increase {ly['V_task']['max_increase']:.2e}")
+    roa = report["region_of_attraction"]
+    lines.append("region of attraction (" + roa["criterion"] + "): " + ", ".join(
+        f"s = {s:g}: {f:.2f}" for s, f in zip(roa["scales"], roa["converged_fraction"])))
+    return "\n".join(lines)
+
+
+def cli_analyze(args: argparse.Namespace) -> int:
+    """``aerial-drake analyze [--out DIR] [--scenario NAME] [--fast] [--seed N] [--quiet]``."""
+    import sys
+
+    from aerial_drake.simulation.scenarios import ScenarioError
+    settings = FAST_SETTINGS if args.fast else FULL_SETTINGS
+    try:
+        report = analyze(args.out, scenario=args.scenario, settings=settings, seed=args.seed,
+                         stream=None if args.quiet else sys.stdout)
+    except (ScenarioError, UnreachablePose) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    print(format_report(report))
+    return 0

@@ -1,0 +1,45 @@
+"""The decomposition of Section II and the law (10)-(22), compiled with numba (double only).
+
+The reference implementation is the numpy code of :mod:`aerial_drake.dynamics.decoupling` and
+:mod:`aerial_drake.control.law`, fed by Drake's kinematics; it stays the path for AutoDiffXd
+(``Linearize``) and is the oracle the tests hold this package against. This package computes the
+same quantities, with the same formulas in the same order, but from its own forward kinematics
+(:class:`~aerial_drake.dynamics.kinematic_tree.KinematicTree`), in compiled loops over small
+fixed-size arrays: one evaluation of the law costs tens of microseconds instead of about two milliseconds
+of numpy calls on 3- to 13-element arrays. See ``docs/performance.md``. (One quantity takes
+another route to the same value: sigma_min(J3) of Assumption 1, from the smallest eigenvalue of
+J3^T J3 as there, by :func:`.linalg._min_eigenvalue_sym`.)
+
+An evaluation of the law allocates nothing. :class:`CompiledLaw` packs the tree, the
+end-effector frame, the gains and the limits into one float and one integer array at
+construction and keeps one float workspace, which the kernels see as named views (the
+``_*Buffers`` tuples); so a call hands numba nine arrays to unbox (it unboxes each argument of
+every call) and none to allocate or free. The law applies Lambda, Gamma and T^-1 to vectors
+only, through the columns of T^-1 that the vectors' nonzero entries meet.
+
+The modules, bottom to top: :mod:`.views` (the decorators and the views of flat storage),
+:mod:`.linalg` (small dense linear algebra), :mod:`.kinematics` (the packed tree and forward
+kinematics), :mod:`.kernels` (Section II and the law) and :mod:`.law` (the Python entry points,
+re-exported here: :class:`CompiledLaw`, :func:`decompose`, :func:`pack_gains`, and
+:func:`compile_law` with :func:`law_cache_is_cold` for compiling before a run,
+:func:`aerial_drake.simulation.runner.compile_kernels`); the kernels are private.
+numba compiles them on first use and caches the machine code next to their files (``cache=True``),
+so only the first run after installing pays the compile time (about a minute on a 2-core
+machine; a note on stderr says so); later processes load the machine code in under a second.
+That compile's memory grows with the LLVM IR numba generates, much of it from two constructs the
+kernels therefore avoid: array-to-array slice assignment (see :func:`.linalg._copy`) and
+numba-level inlining of the functions that build the tuples of views (see
+``views._forceinline``).
+"""
+
+from aerial_drake.control.compiled.kernels import ASSUMPTION_1, ASSUMPTION_2, NONFINITE, OK
+from aerial_drake.control.compiled.law import (
+    CompiledLaw,
+    compile_law,
+    decompose,
+    law_cache_is_cold,
+    pack_gains,
+)
+
+__all__ = ["ASSUMPTION_1", "ASSUMPTION_2", "NONFINITE", "OK", "CompiledLaw", "compile_law",
+           "decompose", "law_cache_is_cold", "pack_gains"]

@@ -1,0 +1,134 @@
+"""The compiled law's Python entry points: :class:`CompiledLaw`, :func:`decompose`,
+:func:`pack_gains`, and :func:`compile_law` with :func:`law_cache_is_cold` (for compiling before
+a run: :func:`aerial_drake.simulation.runner.compile_kernels`)."""
+
+from __future__ import annotations
+
+import os
+import sys
+
+import numpy as np
+from numba import types
+
+from aerial_drake.control.law import DIAGNOSTICS_SIZE
+from aerial_drake.dynamics.kinematic_tree import KinematicTree
+from aerial_drake.trajectories.reference import (
+    COM_REFERENCE_SIZE,
+    HEADING_REFERENCE_SIZE,
+    TASK_REFERENCE_SIZE,
+    unpack_heading_reference,
+    unpack_task_reference,
+)
+from aerial_drake.control.compiled.kinematics import _pack_tree
+from aerial_drake.control.compiled.kernels import _decompose, _law, _workspace_size
+
+# --- Python entry points ---------------------------------------------------------------------
+
+_DECOMPOSITION_FIELDS = ("m", "R", "p_all", "R_all", "body_J", "body_J_dot", "M", "C", "g",
+                         "J_g", "J_g_dot", "p_WG", "N", "N_dot", "T", "T_dot", "T_inv",
+                         "Lambda", "Gamma", "xi")
+
+
+def decompose(tree: KinematicTree, q: np.ndarray, v: np.ndarray) -> dict[str, np.ndarray]:
+    """The compiled decomposition at ``(q, v)`` by field name (as in
+    :class:`aerial_drake.dynamics.decoupling.Decomposition`; ``p_all``/``R_all``/``body_J``/
+    ``body_J_dot`` are per body of ``tree``). For tests and benchmarks."""
+    model, index = _pack_tree(tree)
+    size = _workspace_size(tree.parent.size, tree.reflected_inertia.size, False)
+    values = _decompose(np.ascontiguousarray(q, dtype=float),
+                        np.ascontiguousarray(v, dtype=float), model, index, tree.gravity_W,
+                        np.zeros(size))
+    return dict(zip(_DECOMPOSITION_FIELDS, values))
+
+
+def pack_gains(K, gravity: float) -> np.ndarray:
+    """The gains of a :class:`aerial_drake.control.law.GainMatrices` and gravity in the order
+    ``_law`` reads them."""
+    return np.concatenate([K.K_x, K.D_x, [K.k_R, K.k_w], K.Lambda2_bar, K.Lambda2_bar_inv,
+                           K.K_y, K.K_z, [K.gamma1, K.gamma2, gravity]]).astype(float)
+
+
+def law_cache_is_cold() -> bool:
+    """Whether numba's cache holds no compiled law yet (the first use after installing)."""
+    try:
+        return not os.path.exists(_law._cache._cache_file._index_path)
+    except AttributeError:  # numba internals moved: say warm (no note, no restart)
+        return False
+
+
+def _note_if_cold() -> None:
+    """Say on stderr that the law is about to compile, if numba's cache is cold."""
+    if law_cache_is_cold():
+        print("aerial_drake: compiling the control law with numba (first use after "
+              "installing; about a minute, cached afterwards) ...", file=sys.stderr,
+              flush=True)
+
+
+# The law's one signature: every argument a C-contiguous 1-D array, float but the index.
+_F64 = types.Array(types.float64, 1, "C")
+_LAW_SIGNATURE = (_F64,) * 7 + (types.Array(types.int64, 1, "C"), _F64)
+
+
+def compile_law() -> None:
+    """Compile the law (and the workspace's size) into numba's cache, or load them from it,
+    without a model: their argument types are the same for every tree
+    (``simulation.runner.compile_kernels``; a test holds these signatures to what a run calls)."""
+    _note_if_cold()
+    _law.compile(_LAW_SIGNATURE)
+    _workspace_size.compile((types.int64, types.int64, types.boolean))
+
+
+class CompiledLaw:
+    """The law (10)-(22) on ``tree``, compiled: ``law(x, com, task, heading, command,
+    diagnostics)`` fills the two output arrays and returns ``(status, f_d_norm, sigma_min)``
+    (status :data:`OK`, :data:`ASSUMPTION_1`, :data:`ASSUMPTION_2` or :data:`NONFINITE`).
+
+    The law works in a buffer of this object's: one call at a time per CompiledLaw (each
+    controller has its own).
+
+    Args:
+        tree: the controller model's tree (:meth:`KinematicTree.from_plant`).
+        num_positions: size of q in the state ``x = [q; v]``.
+        end_effector: ``(index of the body in tree, R_BE, p_BE)`` of the task frame E.
+        q3_position_index, q3_velocity_index: the task's joint coordinate q3.
+        gains: packed by :func:`pack_gains`.
+        sigma_min_J3_limit, f_d_limit: the Assumption 1 and 2 thresholds.
+    """
+
+    def __init__(self, tree: KinematicTree, num_positions: int,
+                 end_effector: tuple[int, np.ndarray, np.ndarray], q3_position_index: int,
+                 q3_velocity_index: int, gains: np.ndarray, sigma_min_J3_limit: float,
+                 f_d_limit: float):
+        body, R_BE, p_BE = end_effector
+        nb, nv = tree.parent.size, tree.reflected_inertia.size
+        gains = np.ravel(gains).astype(float)
+        if gains.size != 17 + 2 * (nv - 6):
+            raise ValueError(f"{gains.size} gains for {nv} velocities: see pack_gains")
+        floats, ints = _pack_tree(tree)
+        # The law's parameters after the tree, in the order _unpack_law reads them.
+        self._model = np.concatenate([floats, np.ravel(R_BE), np.ravel(p_BE), gains,
+                                      [sigma_min_J3_limit, f_d_limit]]).astype(float)
+        self._index = np.concatenate([ints, [num_positions, body, q3_position_index,
+                                             q3_velocity_index]]).astype(np.int64)
+        self._work = np.zeros(_workspace_size(nb, nv, True))
+        self._nq, self._nv = int(num_positions), nv
+        self._compile()
+
+    def _compile(self) -> None:
+        """Compile (or load from numba's cache) now, at construction, rather than in the
+        middle of the first simulation step: one evaluation at rest, outputs discarded."""
+        if _law.signatures:
+            return
+        _note_if_cold()
+        x = np.zeros(self._nq + self._nv)
+        x[0] = 1.0  # unit quaternion, all else zero
+        com, task = np.zeros(COM_REFERENCE_SIZE), np.zeros(TASK_REFERENCE_SIZE)
+        heading = np.zeros(HEADING_REFERENCE_SIZE)
+        unpack_task_reference(task).R_ed[:] = np.eye(3)  # views into the vectors
+        unpack_heading_reference(heading)[0, 0] = 1.0  # b1d = e_x
+        self(x, com, task, heading, np.empty(4 + self._nv - 6), np.empty(DIAGNOSTICS_SIZE))
+
+    def __call__(self, x: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
+                 command: np.ndarray, diagnostics: np.ndarray) -> tuple[int, float, float]:
+        return _law(x, com, task, heading, command, diagnostics, self._model, self._index,
+                    self._work)

@@ -1,0 +1,336 @@
+"""The control law of Section III, (10)-(22), as pure math on a :class:`Decomposition`.
+
+No Drake systems here: :func:`compute_control` takes the decoupled dynamics at one state, the
+end-effector kinematics and the reference, and returns the inputs ``f, mu, tau`` of (22) and the
+diagnostics. :mod:`aerial_drake.control.controller` wraps it in a LeafSystem.
+
+Choices where the paper is silent (also in ``docs/control.md``):
+
+- The task is ``y = [p_E; orientation of E; q3]`` (27). Its velocity is
+  ``y_dot = [v_E; w_E; q3_dot]`` (World) and its orientation error is
+  ``e_o = vee(skew(R_E R_ed^T))`` (World), whose derivative at zero error is ``w_E - w_ed``.
+  The task velocity error is velocity-level, ``J xi - y_d_dot`` (17).
+- The feed-forwards take the CoM acceleration and jerk from the model (9a) and the base angular
+  acceleration from the closed loop (16), as the paper suggests.
+- ``V1`` of (25) uses ``k_R / 2 tr(E3 - R_d^T R_b)`` (Lee et al.'s ``k_R Psi``; the paper's
+  print drops the 1/2, without which ``dV1/dt`` has an uncancelled ``e_R . w~`` term).
+
+Scalar types: the law runs unchanged on float arrays and on numpy object arrays of AutoDiffXd
+(a :class:`Decomposition` from an AutoDiffXd plant, for ``Linearize``); the assumption checks
+and the diagnostics' norms and angles are then taken on the values.
+"""
+
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from aerial_drake.dynamics.decoupling import Decomposition, cross_rows, cross, inv, value_of, vee
+
+_E3 = np.eye(3)
+_e3 = np.array([0.0, 0.0, 1.0])
+
+
+@dataclass
+class Gains:
+    """Controller gains of Table II (values live in the scenario YAML). Diagonal matrices are
+    given by their diagonals, as Proposition 1 requires diagonal positive definite gains."""
+
+    # CoM stiffness K_x, diagonal (N/m).
+    K_x: list[float] = field(default_factory=list)
+    # CoM damping D_x, diagonal (N s/m).
+    D_x: list[float] = field(default_factory=list)
+    # Attitude stiffness k_R (N m).
+    k_R: float = float("nan")
+    # Attitude damping k_w (N m s/rad).
+    k_w: float = float("nan")
+    # Desired closed-loop attitude inertia Lambda_2 bar, diagonal (kg m^2).
+    Lambda2_bar: list[float] = field(default_factory=list)
+    # Task error gain K_y, diagonal (1/s): 3 position, 3 orientation, then the q3 entry.
+    K_y: list[float] = field(default_factory=list)
+    # Task velocity gain K_z, diagonal.
+    K_z: list[float] = field(default_factory=list)
+    # The small constants gamma_1, gamma_2 of the Lyapunov function V1 (25); they do not
+    # enter the control law. For Table II's gains gamma_1 = 20 meets Lee et al.'s CoM
+    # conditions (< 82) and gamma_2 = 0.4 their attitude bound (< 0.44); the condition that
+    # couples the two cannot be met with Table II's gains (docs/analysis.md, section 5).
+    lyapunov_gamma1: float = 20.0
+    lyapunov_gamma2: float = 0.4
+
+    def validate(self, n_task: int = 7, prefix: str = "gains") -> "Gains":
+        """Raise ValueError naming the field if a gain is missing, of the wrong size, or not
+        positive definite. Returns self."""
+        sizes = {"K_x": 3, "D_x": 3, "Lambda2_bar": 3, "K_y": n_task, "K_z": n_task}
+        for name, size in sizes.items():
+            value = np.asarray(getattr(self, name), dtype=float)
+            if value.shape != (size,):
+                raise ValueError(
+                    f"{prefix}.{name} must be a list of {size} diagonal entries; got "
+                    f"{getattr(self, name)!r}. Set it in the scenario YAML.")
+            if not np.all(np.isfinite(value)) or np.any(value <= 0.0):
+                raise ValueError(
+                    f"{prefix}.{name} = {list(value)} is not positive definite: every diagonal "
+                    "entry must be finite and > 0 (Proposition 1).")
+        for name in ("k_R", "k_w", "lyapunov_gamma1", "lyapunov_gamma2"):
+            value = float(getattr(self, name))
+            if not np.isfinite(value) or value <= 0.0:
+                raise ValueError(f"{prefix}.{name} = {value} must be finite and > 0 "
+                                 "(Proposition 1). Set it in the scenario YAML.")
+        return self
+
+
+#: Default thresholds of the checks of Assumption 1 (sigma_min(J_3)) and 2 (|f_d|, N); a
+#: scenario may set its own (``sigma_min_J3_limit``, ``f_d_limit``).
+SIGMA_MIN_J3_LIMIT = 1e-3
+F_D_LIMIT = 1.0
+
+
+class AssumptionViolation(RuntimeError):
+    """Raised when Assumption 1 (J_3 nonsingular) or 2 (|f_d| > 0) of the paper fails."""
+
+
+def assumption_1_message(sigma_min: float, limit: float) -> str:
+    return (f"Assumption 1 violated: J_3 is singular, sigma_min(J_3) = {sigma_min:.3g} "
+            f"(limit {limit:g})")
+
+
+def assumption_2_message(f_d_norm: float, limit: float) -> str:
+    return (f"Assumption 2 violated: the desired thrust vanishes, |f_d| = {f_d_norm:.3g} N "
+            f"(limit {limit:g} N)")
+
+
+@dataclass(frozen=True)
+class TaskKinematics:
+    """The task ``y`` at one state: end-effector pose, ``q3``, and ``y_dot = J_y v``."""
+
+    p_WE: np.ndarray  # (3)
+    R_WE: np.ndarray  # (3, 3)
+    q3: float
+    J_y: np.ndarray  # (7, nv): rows [v_E (World); w_E (World); q3_dot]
+    J_y_dot: np.ndarray
+
+
+@dataclass(frozen=True)
+class Reference:
+    """The desired trajectory at one instant (see :mod:`aerial_drake.trajectories.reference`)."""
+
+    com: np.ndarray  # (5, 3): x_d and its first four derivatives
+    p_ed: np.ndarray
+    R_ed: np.ndarray
+    q3d: float
+    y_d_dot: np.ndarray  # (7): [v_ed; w_ed; q3d_dot]
+    y_d_ddot: np.ndarray  # (7): [a_ed; dw_ed; q3d_ddot]
+    b1d: np.ndarray  # (3, 3): b1d and its first two derivatives
+
+
+# Diagnostics layout (name, size); n = 7 task coordinates.
+DIAGNOSTICS_LAYOUT: tuple[tuple[str, int], ...] = (
+    ("x_tilde", 3), ("x_tilde_dot", 3), ("e_R", 3), ("w_tilde", 3), ("y_tilde", 7),
+    ("z_tilde", 7), ("sigma_min_J3", 1), ("f_d_norm", 1), ("V1", 1), ("V_task", 1), ("V", 1),
+    ("com_error", 1), ("base_attitude_error", 1), ("ee_position_error", 1),
+    ("ee_orientation_error", 1), ("thrust_residual", 2),
+)
+
+
+def diagnostics_slices(layout=DIAGNOSTICS_LAYOUT) -> dict[str, slice]:
+    """Name -> slice into the diagnostics vector, for ``layout`` ((name, size) pairs; by
+    default this version's, or e.g. the one stored in a log)."""
+    out, start = {}, 0
+    for name, size in layout:
+        out[name] = slice(start, start + size)
+        start += size
+    return out
+
+
+DIAGNOSTICS_SIZE = sum(size for _, size in DIAGNOSTICS_LAYOUT)
+
+
+@dataclass(frozen=True)
+class ControlOutput:
+    f: float  # thrust along the body z axis (N)
+    mu: np.ndarray  # body torques (N m), base frame
+    tau: np.ndarray  # joint torques (N m)
+    diagnostics: np.ndarray  # DIAGNOSTICS_LAYOUT
+    # Intermediate quantities, for analysis and tests.
+    u_prime: np.ndarray  # u' of (8)
+    R_d: np.ndarray
+    w_d: np.ndarray
+    w_d_dot: np.ndarray
+    Lambda_z: np.ndarray
+    Gamma_z: np.ndarray
+    J3: np.ndarray
+
+
+def _norm(a):
+    """Euclidean norm of a float or AutoDiffXd (object) vector."""
+    return np.sqrt(a @ a) if a.dtype == object else np.linalg.norm(a)
+
+
+def unit_vector_derivatives(a, a_dot, a_ddot):
+    """``b = a/|a|`` and its first two time derivatives."""
+    n = _norm(a)
+    b = a / n
+    ad_b = a_dot @ b
+    b_dot = (a_dot - b * ad_b) / n
+    # d/dt(a_dot - b (a_dot.b)) / n - (a_dot - b (a_dot.b)) n_dot / n^2, with n_dot = a_dot.b
+    b_ddot = (a_ddot - b_dot * ad_b - b * (a_ddot @ b + a_dot @ b_dot)) / n - b_dot * ad_b / n
+    return b, b_dot, b_ddot
+
+
+def desired_attitude(f_d, f_d_dot, f_d_ddot, b1d):
+    """R_d of (12)-(13) and its first two time derivatives, from f_d and the heading b1d."""
+    b3, b3_dot, b3_ddot = unit_vector_derivatives(f_d, f_d_dot, f_d_ddot)  # (12)
+    b1, b1_dot, b1_ddot = b1d
+    # c = b3 x b1 and its derivatives (Leibniz), six cross products in one call.
+    x = cross_rows(np.column_stack([b3, b3_dot, b3, b3_ddot, b3_dot, b3]),
+                    np.column_stack([b1, b1, b1_dot, b1, b1_dot, b1_ddot]))
+    c, c_dot, c_ddot = x[:, 0], x[:, 1] + x[:, 2], x[:, 3] + 2.0 * x[:, 4] + x[:, 5]
+    b2, b2_dot, b2_ddot = unit_vector_derivatives(c, c_dot, c_ddot)
+    # (13): R_d = [b2 x b3, b2, b3], and its derivatives.
+    y = cross_rows(np.column_stack([b2, b2_dot, b2, b2_ddot, b2_dot, b2]),
+                    np.column_stack([b3, b3, b3_dot, b3, b3_dot, b3_ddot]))
+    R_d = np.column_stack([y[:, 0], b2, b3])
+    R_d_dot = np.column_stack([y[:, 1] + y[:, 2], b2_dot, b3_dot])
+    R_d_ddot = np.column_stack([y[:, 3] + 2.0 * y[:, 4] + y[:, 5], b2_ddot, b3_ddot])
+    return R_d, R_d_dot, R_d_ddot, _norm(c)
+
+
+def desired_force(m, gravity: float, com_reference: np.ndarray, x_t: np.ndarray,
+                  x_t_dot: np.ndarray, K_x: np.ndarray, D_x: np.ndarray) -> np.ndarray:
+    """(10): f_d = m x_d'' + m g e3 - K_x x~ - D_x x~_dot (K_x, D_x diagonals).
+
+    ``com_reference`` holds x_d and its derivatives as rows (5, 3)."""
+    return m * (com_reference[2] + gravity * _e3) - K_x * x_t - D_x * x_t_dot
+
+
+def rotation_angle(R: np.ndarray) -> float:
+    """Geodesic angle of a rotation matrix (rad)."""
+    R = value_of(R)
+    return float(np.arccos(np.clip(0.5 * (np.trace(R) - 1.0), -1.0, 1.0)))
+
+
+def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "GainMatrices",
+                    gravity: float, *,
+                    sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT,
+                    f_d_limit: float = F_D_LIMIT,
+                    ) -> ControlOutput:
+    """The whole law (10)-(22) at one state.
+
+    Raises:
+        AssumptionViolation: when sigma_min(J_3) < ``sigma_min_J3_limit`` (Assumption 1) or
+            |f_d| < ``f_d_limit`` N (Assumption 2).
+    """
+    m, R = d.m, d.R
+    xi = d.xi
+    xg_dot, w_b, rho = xi[:3], xi[3:6], xi[6:]
+    x_d, xd1, xd2, xd3, xd4 = ref.com
+    Re3 = R[:, 2]
+    ge3 = gravity * _e3
+
+    # CoM control (10)-(11).
+    x_t = d.p_WG - x_d
+    x_t_dot = xg_dot - xd1
+    f_d = desired_force(m, gravity, ref.com, x_t, x_t_dot, K.K_x, K.D_x)  # (10)
+    f_d_norm = float(np.linalg.norm(value_of(f_d)))
+    if not f_d_norm > f_d_limit:
+        raise AssumptionViolation(assumption_2_message(f_d_norm, f_d_limit))
+    u1 = f_d @ Re3  # (11)
+    # CoM acceleration and jerk from the model (9a), for the attitude feed-forward.
+    xg_dd = u1 * Re3 / m - ge3
+    x_t_dd = xg_dd - xd2
+    f_d_dot = m * xd3 - K.K_x * x_t_dot - K.D_x * x_t_dd
+    Re3_dot = R @ cross(w_b, _e3)
+    u1_dot = f_d_dot @ Re3 + f_d @ Re3_dot
+    xg_ddd = (u1_dot * Re3 + u1 * Re3_dot) / m
+    f_d_ddot = m * xd4 - K.K_x * x_t_dd - K.D_x * (xg_ddd - xd3)
+
+    # Attitude control (12)-(16).
+    R_d, R_d_dot, R_d_ddot, _ = desired_attitude(f_d, f_d_dot, f_d_ddot, ref.b1d)
+    Omega_d = vee(R_d.T @ R_d_dot)
+    Omega_d_dot = vee(R_d_dot.T @ R_d_dot + R_d.T @ R_d_ddot)
+    RtRd = R.T @ R_d
+    w_d = RtRd @ Omega_d
+    w_d_dot = -cross(w_b, w_d) + RtRd @ Omega_d_dot
+    e_R = vee(R_d.T @ R)  # (14): vee() takes the skew part, 1/2 (A - A^T)
+    w_t = w_b - w_d  # (15)
+    # Under (16) the base's angular acceleration is this (used again by the task feed-forward).
+    w_b_dot = w_d_dot - K.Lambda2_bar_inv * (K.k_R * e_R + K.k_w * w_t)
+    Lambda22, Gamma22 = d.Lambda[3:6, 3:6], d.Gamma[3:6, 3:6]
+    Gamma23 = d.Gamma[3:6, 6:]
+    u2 = Gamma22 @ w_b + Lambda22 @ w_b_dot  # (16)
+
+    # Task control (17)-(20).
+    J = task.J_y @ d.T_inv
+    J_dot = (task.J_y_dot - J @ d.T_dot) @ d.T_inv  # d/dt T^{-1} = -T^{-1} T_dot T^{-1}
+    J1, J2, J3 = J[:, :3], J[:, 3:6], J[:, 6:]
+    J1_dot, J2_dot, J3_dot = J_dot[:, :3], J_dot[:, 3:6], J_dot[:, 6:]
+    J3_value = value_of(J3)
+    # sigma_min from the smallest eigenvalue of J3^T J3 (a symmetric 7x7: cheaper than an SVD;
+    # accurate to ~1e-16 sigma_max^2 / sigma_min, far below the check's threshold).
+    sigma_min = float(np.sqrt(max(np.linalg.eigvalsh(J3_value.T @ J3_value)[0], 0.0)))
+    if not sigma_min > sigma_min_J3_limit:
+        raise AssumptionViolation(assumption_1_message(sigma_min, sigma_min_J3_limit))
+    R_err = task.R_WE @ ref.R_ed.T
+    y_t = np.concatenate([task.p_WE - ref.p_ed, vee(R_err), [task.q3 - ref.q3d]])
+    y_t_dot = J @ xi - ref.y_d_dot  # (17)
+    z = J3 @ rho
+    z_d = ref.y_d_dot - J1 @ xg_dot - J2 @ w_b - K.K_y * y_t
+    z_t = z - z_d  # (18)
+    z_d_dot = (ref.y_d_ddot - J1 @ xg_dd - J1_dot @ xg_dot - J2 @ w_b_dot - J2_dot @ w_b
+               - K.K_y * y_t_dot)  # (20)
+    J3_inv = inv(J3)
+    Lambda33, Gamma33 = d.Lambda[6:, 6:], d.Gamma[6:, 6:]
+    Lambda_z = J3_inv.T @ Lambda33 @ J3_inv  # (19)
+    Gamma_z = J3_inv.T @ (Gamma33 - Lambda33 @ J3_inv @ J3_dot) @ J3_inv
+    u3 = J3.T @ (Lambda_z @ z_d_dot + Gamma_z @ z_d - K.K_z * z_t)
+
+    # Input mapping (8), (22): F = T^T u' is the generalized force J_b^T B psi + Q^T tau.
+    u_prime = np.concatenate([u1 * Re3, Gamma23 @ rho + u2, -Gamma23.T @ w_b + u3])  # (8)
+    F = d.T.T @ u_prime  # (22)
+    mu = R.T @ F[:3]
+    force_b = R.T @ F[3:6]
+    tau = F[6:]
+
+    # Diagnostics: errors, assumptions, Lyapunov function (24)-(25).
+    V_task = 0.5 * z_t @ Lambda_z @ z_t + y_t @ (K.K_y * K.K_z * y_t)  # (24)
+    V1 = (0.5 * m * x_t_dot @ x_t_dot + 0.5 * x_t @ (K.K_x * x_t)
+          + K.gamma1 * x_t @ x_t_dot + 0.5 * w_t @ (K.Lambda2_bar * w_t)
+          + 0.5 * K.k_R * np.trace(_E3 - R_d.T @ R) + K.gamma2 * e_R @ w_t)  # (25)
+    diagnostics = np.concatenate([
+        x_t, x_t_dot, e_R, w_t, y_t, z_t,
+        [sigma_min, f_d_norm, V1, V_task, V1 + V_task,
+         np.linalg.norm(value_of(x_t)), rotation_angle(R_d.T @ R),
+         np.linalg.norm(value_of(y_t[:3])),
+         rotation_angle(R_err)],
+        force_b[:2]])
+    f = force_b[2] if force_b.dtype == object else float(force_b[2])
+    return ControlOutput(f=f, mu=mu, tau=tau, diagnostics=diagnostics,
+                         u_prime=u_prime, R_d=R_d, w_d=w_d, w_d_dot=w_d_dot,
+                         Lambda_z=Lambda_z, Gamma_z=Gamma_z, J3=J3)
+
+
+@dataclass(frozen=True)
+class GainMatrices:
+    """Validated gains as numpy diagonals, for the control law's hot path."""
+
+    K_x: np.ndarray
+    D_x: np.ndarray
+    k_R: float
+    k_w: float
+    Lambda2_bar: np.ndarray
+    Lambda2_bar_inv: np.ndarray
+    K_y: np.ndarray
+    K_z: np.ndarray
+    gamma1: float
+    gamma2: float
+
+    @classmethod
+    def from_gains(cls, gains: Gains, n_task: int = 7) -> "GainMatrices":
+        gains = dataclasses.replace(gains).validate(n_task)
+        L2 = np.asarray(gains.Lambda2_bar, dtype=float)
+        return cls(K_x=np.asarray(gains.K_x, float), D_x=np.asarray(gains.D_x, float),
+                   k_R=float(gains.k_R), k_w=float(gains.k_w), Lambda2_bar=L2,
+                   Lambda2_bar_inv=1.0 / L2, K_y=np.asarray(gains.K_y, float),
+                   K_z=np.asarray(gains.K_z, float), gamma1=float(gains.lyapunov_gamma1),
+                   gamma2=float(gains.lyapunov_gamma2))

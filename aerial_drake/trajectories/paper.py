@@ -1,0 +1,355 @@
+"""The paper's reference trajectory (Section IV-A, eqs (27)-(33)): pure math and a Drake system.
+
+The end-effector task (27) is y_d = [x_ed; R_ed; q3d], with
+
+    x_ed(t) = center + A_b basic(t) + A_a agile(t)                                   (28)
+        basic(t) = [-sin(w_b t), -cos(w_b t), sin(w_b t) + c t]
+        agile(t) = [ sin(w_a t),  cos(w_a t), cos(w_a t)]
+    R_ed(t)  = R1(phi1) R2(phi2) R3(phi3)   (R1 = RotX, R2 = RotY, R3 = RotZ)        (29)
+    q3d(t)   = q3_desired                                                           (30)
+        phi1 = a1 sin(w_o t),  phi2 = a2 cos(w_o t),  phi3 = a3 cos(w_o t)          (31)
+    b1d(t)   = [cos phi4, sin phi4, 0],  phi4 = phi4_0 + w_h t                      (32)
+    x_d(t)   = x_c(t) + R3(phi4) r_o,  x_c(t) = center + A_b basic(t)               (33)
+
+x_c is the "basic" motion realised by the whole system, A_a agile(t) the part left to the arm.
+Every constant is a field of :class:`TrajectoryParams` (defaults: the paper's values). All
+derivatives are analytic (closed form); the tests hold each one against a central difference.
+
+Frames and units: every vector is expressed in World (m, m/s, rad, rad/s, ...). The angular
+velocity of the desired end-effector frame satisfies d/dt R_ed = hat(w_ed) R_ed, and
+dw_ed = d/dt w_ed (both in World).
+
+The reference at a time (:func:`evaluate_reference`) or over times (:func:`sample_reference`)
+comes as a :class:`~aerial_drake.trajectories.reference.ReferenceSample` (its packed layout is
+in :mod:`aerial_drake.trajectories.reference`);
+:class:`~aerial_drake.trajectories.generator.ReferenceGenerator` is the Drake source of it.
+
+Do not add ``from __future__ import annotations`` here: Drake's ``yaml_load_typed`` needs the
+real (non-string) field types of :class:`TrajectoryParams`.
+"""
+
+import dataclasses
+import math
+import typing
+
+import numba
+import numpy as np
+
+from aerial_drake.trajectories.reference import (
+    _COM,
+    _HEADING,
+    _TASK,
+    _TASK_A,
+    _TASK_DW,
+    _TASK_P,
+    _TASK_Q3,
+    _TASK_Q3_DDOT,
+    _TASK_Q3_DOT,
+    _TASK_R,
+    _TASK_V,
+    _TASK_W,
+    _TOTAL_SIZE,
+    ReferenceSample,
+)
+
+__all__ = ["TrajectoryParams", "evaluate_reference", "sample_reference", "compile_reference"]
+
+
+@dataclasses.dataclass
+class TrajectoryParams:
+    """Constants of the reference trajectory (28)-(33); defaults are the paper's values.
+
+    Loadable by ``pydrake.common.yaml.yaml_load_typed`` (a misspelt key is an error).
+    Call :meth:`validate` before use (:class:`ReferenceGenerator` and the pure functions do).
+    """
+
+    # Centre of the basic motion, World [x, y, z] (m).
+    center: typing.List[float] = dataclasses.field(default_factory=lambda: [0.6, 0.0, 1.3])
+    # Amplitude A_b of the basic motion (m).
+    basic_amplitude: float = 0.5
+    # Angular frequency w_b of the basic motion (rad/s).
+    basic_frequency: float = 0.5
+    # Climb rate c of the basic motion's z term, scaled by A_b (1/s): z gains A_b c t.
+    basic_climb_rate: float = 0.045
+    # Amplitude A_a of the agile motion (m).
+    agile_amplitude: float = 0.1
+    # Angular frequency w_a of the agile motion (rad/s).
+    agile_frequency: float = 3.0
+    # Amplitudes [a1, a2, a3] of the orientation angles phi1, phi2, phi3 of (31) (rad).
+    orientation_amplitudes: typing.List[float] = dataclasses.field(
+        default_factory=lambda: [0.5, 0.5, 0.5]
+    )
+    # Angular frequency w_o of the orientation angles (rad/s).
+    orientation_frequency: float = 3.0
+    # Desired angle of the arm's third joint, q3d (rad).
+    q3_desired: float = 0.0
+    # Initial helicopter heading phi4_0 (rad).
+    heading_initial: float = 0.0
+    # Heading rate w_h, phi4 = phi4_0 + w_h t (rad/s); either sign.
+    heading_rate: float = 0.5
+    # Offset r_o from x_c to the desired CoM, rotated by R3(phi4), [x, y, z] (m).
+    com_offset: typing.List[float] = dataclasses.field(default_factory=lambda: [-0.3, 0.0, 0.6])
+
+    def validate(self) -> None:
+        """Raises ValueError naming every bad field and how to fix it."""
+        errors = []
+        for name, meaning in (
+            ("center", "[x, y, z] in m"),
+            ("orientation_amplitudes", "[a1, a2, a3] in rad"),
+            ("com_offset", "[x, y, z] in m"),
+        ):
+            value = getattr(self, name)
+            try:
+                length = len(value)
+            except TypeError:
+                length = None
+            if length != 3:
+                errors.append(
+                    f"'{name}' must be a list of 3 floats {meaning}, got {value!r}: "
+                    "give exactly three entries"
+                )
+                continue
+            if not all(_is_finite_number(x) for x in value):
+                errors.append(f"'{name}' must hold finite numbers, got {value!r}")
+            elif name == "orientation_amplitudes" and any(x < 0 for x in value):
+                errors.append(
+                    f"'{name}' must be >= 0, got {value!r}: flip the sign through the "
+                    "angle's phase instead (an amplitude is a magnitude)"
+                )
+        for name in (
+            "basic_amplitude",
+            "basic_frequency",
+            "basic_climb_rate",
+            "agile_amplitude",
+            "agile_frequency",
+            "orientation_frequency",
+            "q3_desired",
+            "heading_initial",
+            "heading_rate",
+        ):
+            value = getattr(self, name)
+            if not _is_finite_number(value):
+                errors.append(f"'{name}' must be a finite float, got {value!r}")
+            elif name.endswith(("_amplitude", "_frequency")) and value < 0:
+                errors.append(f"'{name}' must be >= 0, got {value!r}: use its magnitude")
+        if errors:
+            raise ValueError("Invalid TrajectoryParams: " + "; ".join(errors) + ".")
+
+
+def _is_finite_number(x) -> bool:
+    return isinstance(x, (int, float, np.floating, np.integer)) and math.isfinite(x)
+
+
+
+def evaluate_reference(params: TrajectoryParams, t: float) -> ReferenceSample:
+    """The reference and its analytic derivatives at time t (s)."""
+    params.validate()
+    packed = np.empty(_TOTAL_SIZE)
+    _fill_reference(_Constants.from_params(params).as_array(), float(t), packed)
+    return ReferenceSample.from_vectors(packed[_COM], packed[_TASK], packed[_HEADING])
+
+
+def sample_reference(params: TrajectoryParams, times: np.ndarray) -> ReferenceSample:
+    """:func:`evaluate_reference` over a 1-D array of N times, vectorised.
+
+    Every field of the result has a leading time axis of length N (e.g. com is (N, 5, 3),
+    R_ed is (N, 3, 3), q3d is (N,)).
+    """
+    params.validate()
+    times = np.asarray(times, dtype=float)
+    if times.ndim != 1:
+        raise ValueError(f"times must be a 1-D array, got shape {times.shape}")
+    packed = np.empty((times.size, _TOTAL_SIZE))
+    _fill_reference_over_time(_Constants.from_params(params).as_array(), times, packed)
+    return ReferenceSample.from_vectors(packed[:, _COM], packed[:, _TASK], packed[:, _HEADING])
+
+
+class _Constants(typing.NamedTuple):
+    """The parameters as plain floats, in the order the formulas use them."""
+
+    cx: float
+    cy: float
+    cz: float
+    A_b: float
+    w_b: float
+    c: float
+    A_a: float
+    w_a: float
+    a1: float
+    a2: float
+    a3: float
+    w_o: float
+    q3: float
+    phi4_0: float
+    w_h: float
+    rx: float
+    ry: float
+    rz: float
+
+    @classmethod
+    def from_params(cls, p: TrajectoryParams) -> "_Constants":
+        return cls(
+            *map(float, p.center),
+            float(p.basic_amplitude),
+            float(p.basic_frequency),
+            float(p.basic_climb_rate),
+            float(p.agile_amplitude),
+            float(p.agile_frequency),
+            *map(float, p.orientation_amplitudes),
+            float(p.orientation_frequency),
+            float(p.q3_desired),
+            float(p.heading_initial),
+            float(p.heading_rate),
+            *map(float, p.com_offset),
+        )
+
+    def as_array(self) -> np.ndarray:
+        """The constants as a float array, in field order (what the compiled code reads)."""
+        return np.array(self, dtype=float)
+
+
+@numba.njit(cache=True)
+def _sin_derivatives(s, c, w: float, amplitude: float = 1.0) -> tuple:
+    """d^k/dt^k of amplitude * sin(w t + phase), k = 0..4, given s, c = sin, cos of the angle."""
+    w2 = w * w
+    return (
+        amplitude * s,
+        amplitude * w * c,
+        -amplitude * w2 * s,
+        -amplitude * w2 * w * c,
+        amplitude * w2 * w2 * s,
+    )
+
+
+@numba.njit(cache=True)
+def _cos_derivatives(s, c, w: float, amplitude: float = 1.0) -> tuple:
+    """d^k/dt^k of amplitude * cos(w t + phase), k = 0..4, given s, c = sin, cos of the angle."""
+    w2 = w * w
+    return (
+        amplitude * c,
+        -amplitude * w * s,
+        -amplitude * w2 * c,
+        amplitude * w2 * w * s,
+        amplitude * w2 * w2 * c,
+    )
+
+
+# Compiled (numba; IEEE arithmetic, no fastmath, so the same doubles as interpreted Python):
+# the generator evaluates it at every controller sample, where interpreted it cost about 30 us.
+@numba.njit(cache=True)
+def _fill_reference(k: np.ndarray, t: float, out: np.ndarray) -> None:
+    """The concatenation [com (15), task (27), heading (9)] at time t, written into ``out``.
+
+    ``k`` holds the :class:`_Constants` in their order (a float array).
+    """
+    cx, cy, cz, A_b, w_b, climb_rate = k[0], k[1], k[2], k[3], k[4], k[5]
+    A_a, w_a, a1, a2, a3, w_o = k[6], k[7], k[8], k[9], k[10], k[11]
+    q3, phi4_0, w_h, rx, ry, rz = k[12], k[13], k[14], k[15], k[16], k[17]
+    sin, cos = math.sin, math.cos
+
+    # (28) basic motion x_c = center + A_b [-sin(w_b t), -cos(w_b t), sin(w_b t) + c t].
+    angle = w_b * t
+    s_b, c_b = sin(angle), cos(angle)
+    sb = _sin_derivatives(s_b, c_b, w_b, A_b)
+    cb = _cos_derivatives(s_b, c_b, w_b, A_b)
+    climb = (A_b * climb_rate * t, A_b * climb_rate, 0.0, 0.0, 0.0)
+    x_c = np.empty((5, 3))
+    for n in range(5):
+        x_c[n, 0] = -sb[n] + (cx if n == 0 else 0.0)
+        x_c[n, 1] = -cb[n] + (cy if n == 0 else 0.0)
+        x_c[n, 2] = sb[n] + climb[n] + (cz if n == 0 else 0.0)
+
+    # (32) heading phi4 = phi4_0 + w_h t; b1d = [cos phi4, sin phi4, 0].
+    phi4 = phi4_0 + w_h * t
+    s4, c4 = sin(phi4), cos(phi4)
+    sh = _sin_derivatives(s4, c4, w_h)
+    ch = _cos_derivatives(s4, c4, w_h)
+
+    # (33) x_d = x_c + R3(phi4) r_o; the k-th derivative of R3(phi4) r_o rotates only its xy part.
+    com, task, heading = out[_COM], out[_TASK], out[_HEADING]
+    for n in range(5):
+        com[3 * n] = x_c[n, 0] + ch[n] * rx - sh[n] * ry
+        com[3 * n + 1] = x_c[n, 1] + sh[n] * rx + ch[n] * ry
+        com[3 * n + 2] = x_c[n, 2] + (rz if n == 0 else 0.0)
+
+    # (28) agile motion A_a [sin(w_a t), cos(w_a t), cos(w_a t)], added to x_c for x_ed; its
+    # value, velocity and acceleration are the task's p_ed, v_ed, a_ed.
+    angle = w_a * t
+    s_a, c_a = sin(angle), cos(angle)
+    sa = _sin_derivatives(s_a, c_a, w_a, A_a)
+    ca = _cos_derivatives(s_a, c_a, w_a, A_a)
+    for n, start in enumerate((_TASK_P.start, _TASK_V.start, _TASK_A.start)):
+        task[start] = x_c[n, 0] + sa[n]
+        task[start + 1] = x_c[n, 1] + ca[n]
+        task[start + 2] = x_c[n, 2] + ca[n]
+
+    # (31) phi1 = a1 sin(w_o t), phi2 = a2 cos(w_o t), phi3 = a3 cos(w_o t), up to 2nd derivative.
+    angle = w_o * t
+    so, co = sin(angle), cos(angle)
+    phi1 = _sin_derivatives(so, co, w_o, a1)
+    phi2 = _cos_derivatives(so, co, w_o, a2)
+    phi3 = _cos_derivatives(so, co, w_o, a3)
+    s1, c1 = sin(phi1[0]), cos(phi1[0])
+    s2, c2 = sin(phi2[0]), cos(phi2[0])
+    s3, c3 = sin(phi3[0]), cos(phi3[0])
+
+    # (29) R_ed = R1(phi1) R2(phi2) R3(phi3), row-major.
+    R_ed = (
+        c2 * c3, -c2 * s3, s2,
+        s1 * s2 * c3 + c1 * s3, -s1 * s2 * s3 + c1 * c3, -s1 * c2,
+        -c1 * s2 * c3 + s1 * s3, c1 * s2 * s3 + s1 * c3, c1 * c2,
+    )  # fmt: skip
+    for i in range(9):
+        task[_TASK_R.start + i] = R_ed[i]
+
+    # w_ed = phi1' e1 + phi2' b + phi3' c with the World axes e1, b = R1 e2, c = R1 R2 e3.
+    # Differentiating, e1' = 0, b' = (phi1' e1) x b, c' = (phi1' e1 + phi2' b) x c, so
+    # dw_ed = phi1'' e1 + phi2'' b + phi3'' c + phi1' phi2' (e1 x b) + phi3' (w_12 x c).
+    d1, d2, d3 = phi1[1], phi2[1], phi3[1]
+    dd1, dd2, dd3 = phi1[2], phi2[2], phi3[2]
+    b = (0.0, c1, s1)
+    c = (s2, -s1 * c2, c1 * c2)
+    e1_x_b = (0.0, -s1, c1)
+    w_12 = (d1, d2 * c1, d2 * s1)
+    w_12_x_c = (
+        w_12[1] * c[2] - w_12[2] * c[1],
+        w_12[2] * c[0] - w_12[0] * c[2],
+        w_12[0] * c[1] - w_12[1] * c[0],
+    )
+    w_ed = (d1 + d2 * b[0] + d3 * c[0], d2 * b[1] + d3 * c[1], d2 * b[2] + d3 * c[2])
+    dw_ed = (
+        dd1 + dd2 * b[0] + dd3 * c[0] + d1 * d2 * e1_x_b[0] + d3 * w_12_x_c[0],
+        dd2 * b[1] + dd3 * c[1] + d1 * d2 * e1_x_b[1] + d3 * w_12_x_c[1],
+        dd2 * b[2] + dd3 * c[2] + d1 * d2 * e1_x_b[2] + d3 * w_12_x_c[2],
+    )
+    for i in range(3):
+        task[_TASK_W.start + i] = w_ed[i]
+        task[_TASK_DW.start + i] = dw_ed[i]
+
+    # (30) q3d constant.
+    task[_TASK_Q3] = q3
+    task[_TASK_Q3_DOT] = 0.0
+    task[_TASK_Q3_DDOT] = 0.0
+
+    # (32) [b1d, b1d', b1d''].
+    for n in range(3):
+        heading[3 * n] = ch[n]
+        heading[3 * n + 1] = sh[n]
+        heading[3 * n + 2] = 0.0
+
+
+@numba.njit(cache=True)
+def _fill_reference_over_time(k: np.ndarray, times: np.ndarray, out: np.ndarray) -> None:
+    """:func:`_fill_reference` at each of the N ``times``, into the rows of ``out`` (N, 51)."""
+    for i in range(times.size):
+        _fill_reference(k, times[i], out[i])
+
+
+def compile_reference() -> None:
+    """Compile the reference kernels into numba's cache, or load them from it, for the
+    argument types a run passes (``simulation.runner.compile_kernels``)."""
+    vector = numba.types.Array(numba.types.float64, 1, "C")
+    _fill_reference.compile((vector, numba.types.float64, vector))
+    _fill_reference_over_time.compile(
+        (vector, vector, numba.types.Array(numba.types.float64, 2, "C")))
+

@@ -1,0 +1,328 @@
+"""The paper's Figs. 3-6 from the run folders written by :mod:`aerial_drake.simulation.runner`.
+
+A run folder holds ``log.npz`` (the logged ports), ``metrics.json`` and ``scenario.yaml`` (the
+scenario as run). From a nominal and, optionally, a disturbed run this module writes
+
+- ``fig3_end_effector``: end-effector position, desired and actual, x/y/z, and the error norm;
+- ``fig4_com``: centre of mass position, desired and actual, x/y/z, and the error norm;
+- ``fig5_orientation_errors``: base attitude error (top) and end-effector orientation error
+  (bottom), as rotation angles;
+- ``fig6_inputs``: thrust, body torques and joint torques that reached the nominal plant, with
+  the input limits dashed;
+
+each as ``.png`` and ``.pdf``. As in the paper: nominal black, disturbed grey, the
+disturbance on the helicopter shaded green and the one at the end effector orange (the windows
+come from the nominal run's scenario).
+
+Nothing is recomputed from the model: the actual CoM and end-effector positions are the
+reference plus the controller's logged errors (``x_tilde = x_g - x_d``,
+``y_tilde[:3] = p_E - p_ed``, see :data:`aerial_drake.control.law.DIAGNOSTICS_LAYOUT`), which is
+exact, and the orientation errors are the logged angles. Rendering uses Matplotlib's Agg
+canvas directly (no pyplot, no global backend switch), so it works without a display.
+
+Command line: ``python -m aerial_drake.viz.plots NOMINAL_DIR [DISTURBED_DIR] [--out DIR]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+
+from aerial_drake.control.law import diagnostics_slices
+from aerial_drake.simulation.metrics import INPUT_NAMES
+from aerial_drake.trajectories.reference import unpack_com_reference, unpack_task_reference
+from aerial_drake.simulation.scenarios import Scenario, load_scenario
+
+FIGURE_NAMES = ("fig3_end_effector", "fig4_com", "fig5_orientation_errors", "fig6_inputs")
+FORMATS = ("png", "pdf")
+
+# The paper's colours (Section IV-B, Figs. 3-6).
+NOMINAL_COLOR = "black"
+DISTURBED_COLOR = "0.6"
+DESIRED_COLOR = "tab:red"
+WINDOW_COLORS = {"helicopter": ("tab:green", 0.18), "end_effector": ("tab:orange", 0.22)}
+WINDOW_LABELS = {"helicopter": "force on the helicopter",
+                 "end_effector": "wrench at the end effector"}
+JOINT_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown",
+                "tab:pink")
+DPI = 120
+
+
+@dataclass(frozen=True)
+class Run:
+    """One run folder, loaded."""
+
+    name: str
+    log: dict[str, np.ndarray]
+    scenario: Scenario
+    metrics: dict
+
+    @property
+    def t(self) -> np.ndarray:
+        return self.log["t"]
+
+    def diagnostic(self, name: str) -> np.ndarray:
+        """A diagnostics entry over time, (N, size), using the layout stored in the log."""
+        return self.log["diagnostics"][:, _diagnostics_slices(self.log)[name]]
+
+    def com(self) -> tuple[np.ndarray, np.ndarray]:
+        """(desired, actual) CoM positions (N, 3) in World (m): x_d and x_d + x_tilde."""
+        x_d = unpack_com_reference(self.log["com_reference"])[:, 0]
+        return x_d, x_d + self.diagnostic("x_tilde")
+
+    def end_effector(self) -> tuple[np.ndarray, np.ndarray]:
+        """(desired, actual) end-effector positions (N, 3) in World (m): p_ed and
+        p_ed + y_tilde[:3]."""
+        p_ed = unpack_task_reference(self.log["task_reference"]).p_ed
+        return p_ed, p_ed + self.diagnostic("y_tilde")[:, :3]
+
+    def input_limits(self) -> dict[str, tuple[float | None, float | None]]:
+        """``{input: (lower, upper)}`` from metrics.json (None: unbounded); empty if absent."""
+        return {k: tuple(v) for k, v in self.metrics.get("input_limits", {}).items()}
+
+
+def _diagnostics_slices(log: dict) -> dict[str, slice]:
+    """The diagnostics layout a log was written with (this version's if it has none)."""
+    if "layout" not in log:
+        return diagnostics_slices()
+    return diagnostics_slices(json.loads(str(log["layout"]))["diagnostics"])
+
+
+def load_run(folder: str | Path) -> Run:
+    """Load ``log.npz``, ``metrics.json`` and ``scenario.yaml`` from a run folder."""
+    folder = Path(folder)
+    missing = [f for f in ("log.npz", "metrics.json", "scenario.yaml")
+               if not (folder / f).is_file()]
+    if missing:
+        raise FileNotFoundError(f"{folder} is not a complete run folder: missing {missing} "
+                                "(write one with `aerial-drake run SCENARIO`)")
+    with np.load(folder / "log.npz") as data:
+        log = {k: data[k] for k in data.files}
+    metrics = json.loads((folder / "metrics.json").read_text())
+    scenario = load_scenario(folder / "scenario.yaml")
+    return Run(name=scenario.name, log=log, scenario=scenario, metrics=metrics)
+
+
+# --- Figure helpers -------------------------------------------------------------------------
+def _new_figure(rows: int, height: float) -> tuple[Figure, list]:
+    fig = Figure(figsize=(9.0, height), dpi=DPI, layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(rows, 1, sharex=True, squeeze=False)[:, 0]
+    for ax in axes:
+        ax.grid(True, color="0.88", linewidth=0.6)
+        ax.margins(x=0)
+    axes[-1].set_xlabel("time t (s)")
+    return fig, list(axes)
+
+
+def _shade_windows(axes, scenario: Scenario, t_end: float) -> list:
+    """Shade the disturbance windows that start before ``t_end``, limit the time axis to
+    [0, t_end]; return legend handles, one per window."""
+    axes[0].set_xlim(0.0, max(t_end, 1e-3))
+    handles = {}
+    for d in scenario.disturbances:
+        if d.start >= t_end:
+            continue
+        color, alpha = WINDOW_COLORS.get(d.target, ("tab:gray", 0.2))
+        for ax in axes:
+            ax.axvspan(d.start, d.stop, color=color, alpha=alpha, linewidth=0, zorder=0)
+        label = f"{WINDOW_LABELS.get(d.target, d.target)} ({d.start:g}-{d.stop:g} s)"
+        handles.setdefault(d.target, []).append(Patch(color=color, alpha=alpha + 0.1,
+                                                      label=label))
+    return [h for hs in handles.values() for h in hs]
+
+
+def _runs(nominal: Run, disturbed: Run | None) -> list[tuple[Run, str, str]]:
+    runs = [(nominal, NOMINAL_COLOR, "nominal")]
+    if disturbed is not None:
+        runs.append((disturbed, DISTURBED_COLOR, "disturbed"))
+    return runs
+
+
+def _t_end(runs) -> float:
+    return max(float(run.t[-1]) for run, _, _ in runs)
+
+
+def _legend(fig: Figure, handles: list) -> None:
+    if not handles:
+        return
+    fig.legend(handles=handles, loc="outside lower center", ncol=min(len(handles), 3),
+               fontsize=9, frameon=False)
+
+
+def _run_handles(runs, desired: bool) -> list:
+    handles = [Line2D([], [], color=c, linewidth=1.4, label=label) for _, c, label in runs]
+    if desired:
+        handles.insert(0, Line2D([], [], color=DESIRED_COLOR, linestyle="--", linewidth=1.2,
+                                 label="desired"))
+    return handles
+
+
+def _position_figure(nominal: Run, disturbed: Run | None, which: str, title: str,
+                     symbol: str) -> Figure:
+    """Figs. 3 and 4: desired and actual positions per axis, then the error norm (log)."""
+    runs = _runs(nominal, disturbed)
+    fig, axes = _new_figure(4, 9.5)
+    desired_drawn = []
+    for run, color, label in runs:
+        desired, actual = getattr(run, which)()
+        for i, ax in enumerate(axes[:3]):
+            ax.plot(run.t, actual[:, i], color=color, linewidth=1.2)
+        error = 1e3 * np.linalg.norm(actual - desired, axis=1)
+        axes[3].semilogy(run.t, np.maximum(error, 1e-4), color=color, linewidth=1.0)
+        # The desired trajectory once, unless the runs track different ones.
+        if not any(len(d) == len(desired) and np.allclose(d, desired) for d in desired_drawn):
+            for i, ax in enumerate(axes[:3]):
+                ax.plot(run.t, desired[:, i], color=DESIRED_COLOR, linestyle="--",
+                        linewidth=1.0, zorder=3)
+            desired_drawn.append(desired)
+    for i, ax in enumerate(axes[:3]):
+        ax.set_ylabel(f"{symbol} {'xyz'[i]} (m)")
+    axes[3].set_ylabel("|error| (mm)")
+    axes[3].set_ylim(bottom=1e-3)
+    windows = _shade_windows(axes, nominal.scenario, _t_end(runs))
+    fig.suptitle(title)
+    _legend(fig, _run_handles(runs, desired=True) + windows)
+    return fig
+
+
+def figure_end_effector(nominal: Run, disturbed: Run | None = None) -> Figure:
+    """Fig. 3: end-effector position p_E against p_ed (World)."""
+    return _position_figure(nominal, disturbed, "end_effector",
+                            "End-effector position (Fig. 3)", "$p_E$")
+
+
+def figure_com(nominal: Run, disturbed: Run | None = None) -> Figure:
+    """Fig. 4: centre of mass x_g against x_d (World)."""
+    return _position_figure(nominal, disturbed, "com", "Centre of mass position (Fig. 4)",
+                            "$x_g$")
+
+
+def figure_orientation_errors(nominal: Run, disturbed: Run | None = None) -> Figure:
+    """Fig. 5: angle of R_d^T R_b (top) and of R_E R_ed^T (bottom)."""
+    runs = _runs(nominal, disturbed)
+    fig, axes = _new_figure(2, 6.0)
+    for run, color, _ in runs:
+        axes[0].plot(run.t, run.diagnostic("base_attitude_error")[:, 0], color=color,
+                     linewidth=1.2)
+        axes[1].plot(run.t, run.diagnostic("ee_orientation_error")[:, 0], color=color,
+                     linewidth=1.2)
+    axes[0].set_ylabel("base attitude error\nangle of $R_d^T R_b$ (rad)")
+    axes[1].set_ylabel("end-effector orientation error\nangle of $R_E R_{ed}^T$ (rad)")
+    for ax in axes:
+        ax.set_ylim(bottom=0.0)
+    windows = _shade_windows(axes, nominal.scenario, _t_end(runs))
+    fig.suptitle("Orientation errors (Fig. 5)")
+    _legend(fig, _run_handles(runs, desired=False) + windows)
+    return fig
+
+
+def _draw_limit(ax, value, color="0.35", text=None) -> None:
+    if value is None:
+        return
+    ax.axhline(value, color=color, linestyle="--", linewidth=0.9, zorder=1)
+    if text:
+        ax.annotate(text, (1.0, value), xycoords=("axes fraction", "data"), xytext=(3, 0),
+                    textcoords="offset points", va="center", fontsize=8, color=color)
+
+
+def figure_inputs(run: Run) -> Figure:
+    """Fig. 6: the inputs that reached the plant (after saturation, and lag if any) of one
+    run, with the limits dashed."""
+    u = run.log["applied_command"]
+    t = run.t
+    limits = run.input_limits()
+    names = list(INPUT_NAMES)
+    fig, axes = _new_figure(3, 9.5)
+    axes[0].plot(t, u[:, 0], color=NOMINAL_COLOR, linewidth=1.1, label="thrust $f$")
+    for bound in limits.get("thrust", (None, None)):
+        _draw_limit(axes[0], bound, text=None if bound is None else f"{bound:g}")
+    axes[0].set_ylabel("thrust $f$ (N)")
+    mu_colors = ("tab:blue", "tab:orange", "tab:green")
+    for i, axis in enumerate("xyz"):
+        axes[1].plot(t, u[:, 1 + i], color=mu_colors[i], linewidth=1.0,
+                     label=f"$\\mu_{axis}$")
+    bounds = {b for k in ("mu_x", "mu_y", "mu_z") for b in limits.get(k, (None, None))}
+    for bound in sorted(b for b in bounds if b is not None):
+        _draw_limit(axes[1], bound, text=f"{bound:g}")
+    axes[1].set_ylabel("body torques $\\mu$ (N m)")
+    n_joint = u.shape[1] - 4
+    for j in range(n_joint):
+        axes[2].plot(t, u[:, 4 + j], color=JOINT_COLORS[j % len(JOINT_COLORS)],
+                     linewidth=0.9, label=f"$\\tau_{j + 1}$")
+    # One dashed pair per distinct joint limit, annotated with the joints it bounds.
+    by_limit: dict[float, list[int]] = {}
+    for j in range(n_joint):
+        lo, hi = limits.get(names[4 + j], (None, None))
+        if hi is not None:
+            by_limit.setdefault(hi, []).append(j + 1)
+            if lo is not None and lo != -hi:
+                by_limit.setdefault(lo, []).append(j + 1)
+    for value, joints in sorted(by_limit.items()):
+        label = "q" + ",".join(str(j) for j in joints)
+        _draw_limit(axes[2], value, text=f"$\\pm${value:g} ({label})")
+        _draw_limit(axes[2], -value)
+    axes[2].set_ylabel("joint torques $\\tau$ (N m)")
+    for ax in axes:
+        ax.legend(loc="upper right", fontsize=8, ncol=7 if ax is axes[2] else 3,
+                  framealpha=0.85)
+    windows = _shade_windows(axes, run.scenario, float(t[-1]))
+    fig.suptitle(f"Inputs of the {run.name} case, as applied; limits dashed (Fig. 6)")
+    _legend(fig, windows)
+    return fig
+
+
+def write_figures(out_dir: str | Path, nominal: Run, disturbed: Run | None = None,
+                  formats: tuple[str, ...] = FORMATS) -> list[Path]:
+    """Write Figs. 3-6 (Fig. 6 from ``nominal``) to ``out_dir``; returns the files written."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    figures = {
+        "fig3_end_effector": figure_end_effector(nominal, disturbed),
+        "fig4_com": figure_com(nominal, disturbed),
+        "fig5_orientation_errors": figure_orientation_errors(nominal, disturbed),
+        "fig6_inputs": figure_inputs(nominal),
+    }
+    written = []
+    for name, fig in figures.items():
+        for fmt in formats:
+            path = out / f"{name}.{fmt}"
+            fig.savefig(path, format=fmt)
+            written.append(path)
+    return written
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m aerial_drake.viz.plots",
+        description="Write the paper's Figs. 3-6 from run folders (log.npz, metrics.json, "
+                    "scenario.yaml).")
+    parser.add_argument("nominal", help="the nominal run's folder (e.g. out/paper/nominal)")
+    parser.add_argument("disturbed", nargs="?", default=None,
+                        help="the disturbed run's folder (optional)")
+    parser.add_argument("--out", default=None,
+                        help="where to write the figures (default: the nominal folder's parent)")
+    args = parser.parse_args(argv)
+    try:
+        nominal = load_run(args.nominal)
+        disturbed = load_run(args.disturbed) if args.disturbed else None
+    except (FileNotFoundError, ValueError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    out = Path(args.out) if args.out else Path(args.nominal).resolve().parent
+    for path in write_figures(out, nominal, disturbed):
+        print(f"wrote {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

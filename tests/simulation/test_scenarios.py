@@ -1,0 +1,140 @@
+"""Scenario files: loading, and clear errors that name the field before anything runs."""
+
+import pytest
+
+from aerial_drake.control.law import AssumptionViolation
+from aerial_drake.simulation.scenarios import ScenarioError, load_scenario, shipped_scenarios
+
+
+def write(tmp_path, text):
+    path = tmp_path / "s.yaml"
+    path.write_text(text)
+    return path
+
+
+def test_shipped_scenarios_load_and_hold_table_ii():
+    assert {"nominal", "orbit"} <= set(shipped_scenarios())
+    s = load_scenario("nominal")
+    assert s.gains.K_x == [800.0] * 3 and s.gains.D_x == [420.0] * 3
+    assert (s.gains.k_R, s.gains.k_w) == (250.0, 200.0)
+    assert s.gains.Lambda2_bar == [1.46, 0.36, 1.46]
+    assert s.gains.K_y == [30.0] * 3 + [10.0] * 3 + [7.0]
+    assert s.gains.K_z == [30.0] * 7
+    assert s.duration == 15.0 and s.controller_period == 1e-3
+    assert (s.actuation.thrust_max, s.actuation.body_torque_max) == (980.6, 200.0)
+
+
+def test_unknown_name_lists_the_shipped_ones():
+    with pytest.raises(ScenarioError, match="no scenario named 'nominl'.*nominal"):
+        load_scenario("nominl")
+
+
+def test_misspelt_key_names_the_field(tmp_path):
+    path = write(tmp_path, "name: x\ngains:\n  K_xx: [1.0, 1.0, 1.0]\n")
+    with pytest.raises(ScenarioError, match="K_xx"):
+        load_scenario(path)
+
+
+def test_wrong_type_names_the_field(tmp_path):
+    path = write(tmp_path, "name: x\nduration: fifteen\n")
+    with pytest.raises(ScenarioError, match="duration"):
+        load_scenario(path)
+
+
+def test_gain_not_positive_definite(tmp_path):
+    text = (shipped_scenarios()["nominal"].read_text()
+            .replace("K_z: [30.0, 30.0, 30.0, 30.0, 30.0, 30.0, 30.0]",
+                     "K_z: [30.0, 30.0, 30.0, -30.0, 30.0, 30.0, 30.0]"))
+    with pytest.raises(ScenarioError, match=r"gains\.K_z .*not positive definite"):
+        load_scenario(write(tmp_path, text))
+
+
+def test_missing_gains_are_named(tmp_path):
+    with pytest.raises(ScenarioError, match=r"gains\.K_x must be a list of 3"):
+        load_scenario(write(tmp_path, "name: x\n"))
+
+
+@pytest.mark.parametrize("override,match", [
+    ({"plant_variant": "quad"}, "plant_variant: 'quad' is not one of"),
+    ({"sigma_min_J3_limit": -1.0}, "sigma_min_J3_limit must be > 0"),
+    ({"f_d_limit": 0.0}, "f_d_limit must be > 0"),
+    ({"duration": -1.0}, "duration must be > 0"),
+    ({"controller_period": -1e-3}, "controller_period must be >= 0"),
+])
+def test_bad_values(override, match):
+    with pytest.raises(ScenarioError, match=match):
+        load_scenario("nominal", overrides=override)
+
+
+def test_bad_disturbance(tmp_path):
+    text = shipped_scenarios()["nominal"].read_text().replace("target: helicopter",
+                                                               "target: tail")
+    with pytest.raises(ScenarioError, match=r"disturbances\[0\]\.target: 'tail'"):
+        load_scenario(write(tmp_path, text))
+
+
+def test_assumption_2_vanishing_thrust():
+    """A free-falling CoM reference with zero error asks for f_d = 0: Assumption 2."""
+    import numpy as np
+    from aerial_drake.robots.models import make_plant
+    from aerial_drake.control.controller import make_controller
+    from aerial_drake.trajectories.paper import evaluate_reference
+    from aerial_drake.simulation.runner import reference_configuration
+
+    s = load_scenario("nominal")
+    model = make_plant("rigid")
+    ctrl = make_controller(model, s.gains)
+    q = reference_configuration(s, model)
+    com, task, heading = evaluate_reference(s.trajectory, 0.0).to_vectors()
+    ctx = model.plant.CreateDefaultContext()
+    model.plant.SetPositions(ctx, q)
+    com = np.zeros(15)
+    com[:3] = model.plant.CalcCenterOfMassPositionInWorld(ctx)
+    com[8] = -9.81  # x_d'' = -g e3
+    with pytest.raises(AssumptionViolation, match=r"Assumption 2 violated: the desired thrust "
+                                                  r"vanishes, \|f_d\| = [-+.e0-9]+ N"):
+        ctrl.solve(np.concatenate([q, np.zeros(13)]), com, task, heading)
+
+
+def test_actuation_limits_have_no_silent_default(tmp_path):
+    text = shipped_scenarios()["nominal"].read_text().replace("  thrust_max: 980.6\n", "")
+    with pytest.raises(ScenarioError, match=r"actuation\.thrust_max must be set"):
+        load_scenario(write(tmp_path, text))
+
+
+def test_rotor_speed_on_the_rigid_plant_is_an_error(tmp_path):
+    text = shipped_scenarios()["nominal"].read_text() + "rotors:\n  speed: 81.0\n"
+    with pytest.raises(ScenarioError, match="rotors.speed is set but plant_variant is 'rigid'"):
+        load_scenario(write(tmp_path, text))
+
+
+def test_cli_reports_a_workspace_error_before_simulating(tmp_path, capsys):
+    from aerial_drake import cli
+
+    text = shipped_scenarios()["nominal"].read_text().replace("agile_amplitude: 0.1",
+                                                               "agile_amplitude: 0.4")
+    code = cli.main(["run", str(write(tmp_path, text)), "--out", str(tmp_path), "--quiet"])
+    assert code == 2
+    assert "leaves the arm's workspace" in capsys.readouterr().err
+    assert not list(tmp_path.glob("*/log.npz"))
+
+
+def test_cli_paper_refuses_viewer_options(capsys):
+    from aerial_drake import cli
+
+    assert cli.main(["run", "paper", "--meshcat"]) == 2
+    assert "watch one scenario" in capsys.readouterr().err
+
+
+def test_cli_ctrl_c_before_the_simulation_exits_130(tmp_path, capsys, monkeypatch):
+    """A Ctrl-C while the scenario loads (before the runner's own handling) is a clean exit
+    130 with a message, not a traceback."""
+    from aerial_drake import cli
+    from aerial_drake.simulation import scenarios
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(scenarios, "load_scenario", interrupted)
+    assert cli.main(["run", "nominal", "--out", str(tmp_path), "--quiet"]) == 130
+    assert "interrupted (Ctrl-C) outside the simulation" in capsys.readouterr().err
