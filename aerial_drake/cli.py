@@ -98,7 +98,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from aerial_drake.simulation.runner import SimulationFailed, SimulationInterrupted, run_scenario
     from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
 
-    if args.scenario == "paper":  # both of Section IV's runs and Figs. 3-6 (aerial_drake.studies.paper)
+    # Both of Section IV's runs and Figs. 3-6 (aerial_drake.studies.paper).
+    if args.scenario == "paper":
         if args.meshcat or args.record or args.realtime_rate is not None:
             print("error: --meshcat, --record and --realtime-rate watch one scenario; use "
                   "'aerial-drake run nominal --meshcat' or 'run disturbed --meshcat'",

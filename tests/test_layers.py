@@ -13,10 +13,10 @@ trajectories own, and no trajectory needs a controller.
 """
 
 import ast
-import tomllib
 from pathlib import Path
 
 import pytest
+import tomllib
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "aerial_drake"

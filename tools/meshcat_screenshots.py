@@ -19,8 +19,8 @@ from pydrake.systems.framework import EventStatus, LeafSystem
 
 from aerial_drake.simulation.runner import run_scenario
 from aerial_drake.simulation.scenarios import load_scenario
-from aerial_drake.viz.screenshot import colourful_fraction, screenshot
 from aerial_drake.viz.meshcat_view import PUBLISH_PERIOD, MeshcatView
+from aerial_drake.viz.screenshot import colourful_fraction, screenshot
 
 #: The snapshot system checks the times on this grid (s); a multiple of the 1 ms steps.
 TICK = PUBLISH_PERIOD  # shots fall on the overlay's frames

@@ -23,10 +23,10 @@ analysis`` then ``analysis.hover_equilibrium(...)`` reads as one toolbox. Import
 package does not import matplotlib (the figures import it when drawn).
 """
 
-from aerial_drake.analysis.settings import (
-    AnalysisSettings,
-    FAST_SETTINGS,
-    FULL_SETTINGS,
+from aerial_drake.analysis.controllability import (
+    controllability,
+    linearize_open_loop,
+    unactuated_directions,
 )
 from aerial_drake.analysis.equilibria import (
     HoverEquilibrium,
@@ -35,6 +35,11 @@ from aerial_drake.analysis.equilibria import (
     hover_equilibrium,
     hover_inputs,
 )
+from aerial_drake.analysis.figures import (
+    figure_eigenvalues,
+    figure_lyapunov,
+    figure_region_of_attraction,
+)
 from aerial_drake.analysis.linearization import (
     ClosedLoopLinearization,
     HoverLoop,
@@ -42,11 +47,6 @@ from aerial_drake.analysis.linearization import (
     compare_eigenvalues,
     linearize_closed_loop,
     predicted_eigenvalues,
-)
-from aerial_drake.analysis.controllability import (
-    controllability,
-    linearize_open_loop,
-    unactuated_directions,
 )
 from aerial_drake.analysis.lyapunov import (
     LyapunovResult,
@@ -60,16 +60,16 @@ from aerial_drake.analysis.region_of_attraction import (
     RegionOfAttraction,
     region_of_attraction,
 )
-from aerial_drake.analysis.figures import (
-    figure_eigenvalues,
-    figure_lyapunov,
-    figure_region_of_attraction,
-)
 from aerial_drake.analysis.report import (
     analyze,
     cli_analyze,
     format_eigenvalue_table,
     format_report,
+)
+from aerial_drake.analysis.settings import (
+    FAST_SETTINGS,
+    FULL_SETTINGS,
+    AnalysisSettings,
 )
 
 __all__ = [

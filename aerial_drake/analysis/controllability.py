@@ -4,18 +4,20 @@ rank of the input matrix falls short (underactuation) (:func:`controllability`).
 
 from __future__ import annotations
 
-
 import numpy as np
-from pydrake.systems.framework import (
-    DiagramBuilder, OutputPortSelection)
+from pydrake.systems.framework import DiagramBuilder, OutputPortSelection
 from pydrake.systems.primitives import (
-    ControllabilityMatrix, Demultiplexer, IsControllable, IsStabilizable,
-    Linearize, LinearSystem)
+    ControllabilityMatrix,
+    Demultiplexer,
+    IsControllable,
+    IsStabilizable,
+    Linearize,
+    LinearSystem,
+)
 
-from aerial_drake.robots.models import (
-    add_to_builder)
 from aerial_drake.analysis.equilibria import HoverEquilibrium
 from aerial_drake.analysis.linearization import _actuate
+from aerial_drake.robots.models import add_to_builder
 
 
 # --- The open loop at hover -----------------------------------------------------------------

@@ -11,10 +11,8 @@ import numpy as np
 from pydrake.math import RollPitchYaw, RotationMatrix
 
 from aerial_drake.dynamics.equilibrium import UnreachablePose, solve_configuration
-from aerial_drake.robots.models import (
-    AerialManipulator, make_plant, nominal_end_effector_offset)
+from aerial_drake.robots.models import AerialManipulator, make_plant, nominal_end_effector_offset
 from aerial_drake.trajectories.reference import ReferenceSample
-
 
 
 # --- Hover equilibrium ----------------------------------------------------------------------

@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-
 import numpy as np
 
 from aerial_drake.analysis.linearization import ClosedLoopLinearization
 from aerial_drake.analysis.lyapunov import LyapunovResult
 from aerial_drake.analysis.region_of_attraction import ROA_UNIT, RegionOfAttraction
-
 
 # --- Figures (matplotlib's object API: no pyplot state, no display needed) ------------------
 _GROUP_STYLE = {"com": ("tab:blue", "CoM"), "attitude": ("tab:orange", "attitude"),

@@ -10,16 +10,18 @@ from dataclasses import dataclass
 
 import numpy as np
 from pydrake.systems.framework import (
-    Diagram, DiagramBuilder, InputPortSelection, OutputPortSelection)
-from pydrake.systems.primitives import (
-    ConstantVectorSource, Demultiplexer, Linearize)
+    Diagram,
+    DiagramBuilder,
+    InputPortSelection,
+    OutputPortSelection,
+)
+from pydrake.systems.primitives import ConstantVectorSource, Demultiplexer, Linearize
 
-from aerial_drake.control.law import Gains
-from aerial_drake.control.controller import DecoupledController, make_controller
-from aerial_drake.simulation.diagram import connect_actuation
-from aerial_drake.robots.models import (
-    AerialManipulator, add_to_builder)
 from aerial_drake.analysis.equilibria import HoverEquilibrium
+from aerial_drake.control.controller import DecoupledController, make_controller
+from aerial_drake.control.law import Gains
+from aerial_drake.robots.models import AerialManipulator, add_to_builder
+from aerial_drake.simulation.diagram import connect_actuation
 
 
 # --- The closed loop at hover ---------------------------------------------------------------

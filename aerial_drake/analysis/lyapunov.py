@@ -13,11 +13,10 @@ from dataclasses import dataclass
 import numpy as np
 from pydrake.systems.analysis import SimulatorConfig
 
-from aerial_drake.control.law import Gains, diagnostics_slices
-from aerial_drake.robots.models import (
-    make_plant)
-from aerial_drake.simulation.scenarios import Scenario, load_scenario
 from aerial_drake.analysis.settings import FULL_SETTINGS
+from aerial_drake.control.law import Gains, diagnostics_slices
+from aerial_drake.robots.models import make_plant
+from aerial_drake.simulation.scenarios import Scenario, load_scenario
 
 
 # --- Lyapunov function along trajectories ---------------------------------------------------
@@ -137,7 +136,9 @@ def lyapunov_study(base: Scenario | str = "nominal", *,
     """``V``, ``V1`` and ``V_task`` of (24)-(25) along :func:`lyapunov_scenario`'s run
     (the controller's diagnostics at the log period). ``gamma1``, ``gamma2`` override the
     scenario's ``gains.lyapunov_gamma1/2`` (they change ``V1``, not the control)."""
-    from aerial_drake.simulation.runner import run_scenario  # runner imports much; keep import local
+    from aerial_drake.simulation.runner import (
+        run_scenario,  # runner imports much; keep import local
+    )
 
     scenario = lyapunov_scenario(base, duration=duration, accuracy=accuracy)
     gains = dataclasses.replace(scenario.gains)

@@ -10,10 +10,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from aerial_drake.analysis.settings import FULL_SETTINGS
 from aerial_drake.control.law import diagnostics_slices
 from aerial_drake.simulation.scenarios import Scenario, load_scenario
-from aerial_drake.analysis.settings import FULL_SETTINGS
-
 
 # --- Region of attraction -------------------------------------------------------------------
 #: Offsets of size 1: base position (m), base roll-pitch-yaw (rad), arm joints (rad), as
@@ -52,7 +51,7 @@ def _unit_vector(rng: np.random.Generator, n: int) -> np.ndarray:
 
 
 def region_of_attraction(base: Scenario | str = "nominal", *,
-                         scales=FULL_SETTINGS.roa_scales,
+                         scales: tuple[float, ...] = FULL_SETTINGS.roa_scales,
                          samples: int = FULL_SETTINGS.roa_samples,
                          duration: float = FULL_SETTINGS.roa_duration,
                          min_decay_rate: float = 1.0, seed: int = 0,

@@ -7,20 +7,28 @@ import argparse
 import json
 import math
 from pathlib import Path
+from typing import TextIO
 
 import numpy as np
 
-from aerial_drake.dynamics.equilibrium import UnreachablePose
-from aerial_drake.robots.models import (
-    make_plant)
-from aerial_drake.simulation.scenarios import load_scenario
-from aerial_drake.analysis.settings import AnalysisSettings, FAST_SETTINGS, FULL_SETTINGS
+from aerial_drake.analysis.controllability import (
+    controllability,
+    linearize_open_loop,
+    unactuated_directions,
+)
 from aerial_drake.analysis.equilibria import default_equilibria
+from aerial_drake.analysis.figures import (
+    figure_eigenvalues,
+    figure_lyapunov,
+    figure_region_of_attraction,
+)
 from aerial_drake.analysis.linearization import linearize_closed_loop
-from aerial_drake.analysis.controllability import controllability, linearize_open_loop, unactuated_directions
 from aerial_drake.analysis.lyapunov import lee_conditions, lyapunov_study, trajectory_accel_bound
 from aerial_drake.analysis.region_of_attraction import region_of_attraction
-from aerial_drake.analysis.figures import figure_eigenvalues, figure_lyapunov, figure_region_of_attraction
+from aerial_drake.analysis.settings import FAST_SETTINGS, FULL_SETTINGS, AnalysisSettings
+from aerial_drake.dynamics.equilibrium import UnreachablePose
+from aerial_drake.robots.models import make_plant
+from aerial_drake.simulation.scenarios import load_scenario
 
 
 # --- Everything, to a folder ----------------------------------------------------------------
@@ -49,7 +57,7 @@ def _json_default(x):
 
 def analyze(out_dir: str | Path = "out/analysis", *, scenario: str = "nominal",
             settings: AnalysisSettings = FULL_SETTINGS, seed: int = 0,
-            stream=None) -> dict:
+            stream: TextIO | None = None) -> dict:
     """Equilibria, linearisations, eigenvalue tables, open-loop controllability, Lee's
     conditions, the Lyapunov study and the region-of-attraction study (``settings``) of
     ``scenario``'s gains;

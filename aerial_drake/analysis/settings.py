@@ -5,9 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 
-
-
-
 @dataclass(frozen=True)
 class AnalysisSettings:
     """The Lyapunov and region-of-attraction studies' settings. The defaults are the full

@@ -8,21 +8,37 @@ be ``Linearize``d (see :mod:`aerial_drake.analysis`).
 
 from __future__ import annotations
 
+import typing
+
 import numpy as np
 from pydrake.autodiffutils import AutoDiffXd, ExtractGradient
 from pydrake.common.value import AbstractValue
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import Frame
-from pydrake.systems.framework import (
-    BasicVector, Context, LeafSystem, LeafSystem_, ValueProducer)
+from pydrake.systems.framework import BasicVector, Context, LeafSystem, LeafSystem_, ValueProducer
 from pydrake.systems.scalar_conversion import TemplateSystem
 
-from aerial_drake.control.law import (
-    DIAGNOSTICS_SIZE, F_D_LIMIT, SIGMA_MIN_J3_LIMIT, AssumptionViolation, ControlOutput,
-    GainMatrices, Gains, Reference, TaskKinematics, assumption_1_message, assumption_2_message,
-    compute_control)
 from aerial_drake.control.compiled import (
-    ASSUMPTION_1, ASSUMPTION_2, NONFINITE, CompiledLaw, pack_gains)
+    ASSUMPTION_1,
+    ASSUMPTION_2,
+    NONFINITE,
+    CompiledLaw,
+    pack_gains,
+)
+from aerial_drake.control.law import (
+    DIAGNOSTICS_SIZE,
+    F_D_LIMIT,
+    SIGMA_MIN_J3_LIMIT,
+    AssumptionViolation,
+    ControlOutput,
+    GainMatrices,
+    Gains,
+    Reference,
+    TaskKinematics,
+    assumption_1_message,
+    assumption_2_message,
+    compute_control,
+)
 from aerial_drake.dynamics.decoupling import DecoupledDynamics, value_of
 from aerial_drake.dynamics.kinematic_tree import KinematicTree, UnsupportedTree
 from aerial_drake.robots.models import AerialManipulator
@@ -35,14 +51,23 @@ from aerial_drake.trajectories.reference import (
     unpack_task_reference,
 )
 
-
 NONFINITE_STATE = ("the plant state is not finite (the simulation diverged before the "
                    "controller could act)")
 
 
-class _ControllerPorts:
+# The controllers' mixins are mixed into a LeafSystem: to the type checker they are one.
+if typing.TYPE_CHECKING:
+    class _LeafSystemMixin(LeafSystem):
+        pass
+else:
+    _LeafSystemMixin = object
+
+
+class _ControllerPorts(_LeafSystemMixin):
     """Port accessors and the sampled outputs shared by the controllers (same port names and
     sizes)."""
+
+    _period: float
 
     @property
     def period(self) -> float:
@@ -89,8 +114,8 @@ class _DecoupledControllerBase(_ControllerPorts):
     outputs are that state (Drake's state output ports): a sample-and-hold, in one Python
     call per sample. ``command`` then holds the sample at t_k over [t_k, t_k+1); so do the
     ``diagnostics``, so a logger at t_k sees those of t_k-1 (the runner re-aligns its log,
-    :func:`aerial_drake.simulation.runner.run_scenario`). Set the held values at the initial state with
-    :meth:`hold_sample` (or leave the first update to do it at t = 0).
+    :func:`aerial_drake.simulation.runner.run_scenario`). Set the held values at the initial
+    state with :meth:`hold_sample` (or leave the first update to do it at t = 0).
 
     Args:
         plant: the controller's model (a finalized, continuous MultibodyPlant of the system's
@@ -186,6 +211,7 @@ class _DecoupledControllerBase(_ControllerPorts):
                        ) -> None:
         """The compiled law, written into ``command`` and ``diagnostics`` (which may be views
         of a context's discrete state); raises as :meth:`evaluate`."""
+        assert self._compiled is not None  # evaluate and the update call this only then
         status, f_d_norm, sigma_min = self._compiled(x, com, task, heading, command, diagnostics)
         self.evaluations += 1
         if status == NONFINITE:
@@ -199,8 +225,8 @@ class _DecoupledControllerBase(_ControllerPorts):
     def solve(self, x: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
               ) -> ControlOutput:
         """The law at state ``x`` and packed references (no Drake context needed), by the
-        reference implementation (:mod:`aerial_drake.dynamics.decoupling`, :mod:`aerial_drake.control.law`),
-        with every intermediate quantity."""
+        reference implementation (:mod:`aerial_drake.dynamics.decoupling`,
+        :mod:`aerial_drake.control.law`), with every intermediate quantity."""
         plant, ctx = self._plant, self._plant_context
         plant.SetPositionsAndVelocities(ctx, x)
         d = self._dynamics.compute(ctx)
@@ -216,7 +242,8 @@ class _DecoupledControllerBase(_ControllerPorts):
                              q3=x[self._q3_q], J_y=J_y, J_y_dot=J_y_dot)
         t = unpack_task_reference(task)
         ref = Reference(
-            com=unpack_com_reference(com), p_ed=t.p_ed, R_ed=t.R_ed, q3d=t.q3d,
+            com=unpack_com_reference(com), p_ed=t.p_ed, R_ed=t.R_ed,
+            q3d=typing.cast(float, t.q3d),  # one instant: a scalar of the 1-D vector
             y_d_dot=np.concatenate([t.v_ed, t.w_ed, [t.q3d_dot]]),
             y_d_ddot=np.concatenate([t.a_ed, t.dw_ed, [t.q3d_ddot]]),
             b1d=unpack_heading_reference(heading))
@@ -236,14 +263,15 @@ class _DecoupledControllerBase(_ControllerPorts):
                 return self.evaluate(x, com, task, heading)
             if not np.all(np.isfinite(value_of(x))):
                 raise FloatingPointError(NONFINITE_STATE)
-            if self._dtype == object:
+            if self._dtype is object:
                 com, task, heading = (_reference_values(r) for r in (com, task, heading))
             out = self.solve(x, com, task, heading)
         except (AssumptionViolation, FloatingPointError) as err:
             raise _at_time(err, context) from None
         return np.concatenate([[out.f], out.mu, out.tau]), out.diagnostics
 
-    def _inputs(self, context: Context) -> tuple[np.ndarray, ...]:
+    def _inputs(self, context: Context
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """The state and the three references at ``context``."""
         return (self._state_port.Eval(context), self._com_port.Eval(context),
                 self._task_port.Eval(context), self._heading_port.Eval(context))

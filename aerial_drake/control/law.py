@@ -23,10 +23,11 @@ and the diagnostics' norms and angles are then taken on the values.
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
-from aerial_drake.dynamics.decoupling import Decomposition, cross_rows, cross, inv, value_of, vee
+from aerial_drake.dynamics.decoupling import Decomposition, cross, cross_rows, inv, value_of, vee
 
 _E3 = np.eye(3)
 _e3 = np.array([0.0, 0.0, 1.0])
@@ -73,9 +74,9 @@ class Gains:
                     f"{prefix}.{name} = {list(value)} is not positive definite: every diagonal "
                     "entry must be finite and > 0 (Proposition 1).")
         for name in ("k_R", "k_w", "lyapunov_gamma1", "lyapunov_gamma2"):
-            value = float(getattr(self, name))
-            if not np.isfinite(value) or value <= 0.0:
-                raise ValueError(f"{prefix}.{name} = {value} must be finite and > 0 "
+            scalar = float(getattr(self, name))
+            if not np.isfinite(scalar) or scalar <= 0.0:
+                raise ValueError(f"{prefix}.{name} = {scalar} must be finite and > 0 "
                                  "(Proposition 1). Set it in the scenario YAML.")
         return self
 
@@ -133,7 +134,8 @@ DIAGNOSTICS_LAYOUT: tuple[tuple[str, int], ...] = (
 )
 
 
-def diagnostics_slices(layout=DIAGNOSTICS_LAYOUT) -> dict[str, slice]:
+def diagnostics_slices(layout: tuple[tuple[str, int], ...] = DIAGNOSTICS_LAYOUT
+                       ) -> dict[str, slice]:
     """Name -> slice into the diagnostics vector, for ``layout`` ((name, size) pairs; by
     default this version's, or e.g. the one stored in a log)."""
     out, start = {}, 0
@@ -167,7 +169,8 @@ def _norm(a):
     return np.sqrt(a @ a) if a.dtype == object else np.linalg.norm(a)
 
 
-def unit_vector_derivatives(a, a_dot, a_ddot):
+def unit_vector_derivatives(a: np.ndarray, a_dot: np.ndarray, a_ddot: np.ndarray
+                            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``b = a/|a|`` and its first two time derivatives."""
     n = _norm(a)
     b = a / n
@@ -178,8 +181,10 @@ def unit_vector_derivatives(a, a_dot, a_ddot):
     return b, b_dot, b_ddot
 
 
-def desired_attitude(f_d, f_d_dot, f_d_ddot, b1d):
-    """R_d of (12)-(13) and its first two time derivatives, from f_d and the heading b1d."""
+def desired_attitude(f_d: np.ndarray, f_d_dot: np.ndarray, f_d_ddot: np.ndarray,
+                     b1d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, Any]:
+    """R_d of (12)-(13) and its first two time derivatives, from f_d and the heading b1d, and
+    |b3 x b1d| (a float, or an AutoDiffXd on that path)."""
     b3, b3_dot, b3_ddot = unit_vector_derivatives(f_d, f_d_dot, f_d_ddot)  # (12)
     b1, b1_dot, b1_ddot = b1d
     # c = b3 x b1 and its derivatives (Leibniz), six cross products in one call.
@@ -196,7 +201,7 @@ def desired_attitude(f_d, f_d_dot, f_d_ddot, b1d):
     return R_d, R_d_dot, R_d_ddot, _norm(c)
 
 
-def desired_force(m, gravity: float, com_reference: np.ndarray, x_t: np.ndarray,
+def desired_force(m: float, gravity: float, com_reference: np.ndarray, x_t: np.ndarray,
                   x_t_dot: np.ndarray, K_x: np.ndarray, D_x: np.ndarray) -> np.ndarray:
     """(10): f_d = m x_d'' + m g e3 - K_x x~ - D_x x~_dot (K_x, D_x diagonals).
 

@@ -28,8 +28,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from pydrake.autodiffutils import ExtractValue
 import pydrake.math
+from pydrake.autodiffutils import ExtractValue
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import BodyIndex, Frame, JacobianWrtVariable, RigidBody
 from pydrake.systems.framework import Context

@@ -143,8 +143,9 @@ def _rpy(R: np.ndarray) -> np.ndarray:
     return RollPitchYaw(RotationMatrix(R)).vector()
 
 
-def configuration_residual(manip: AerialManipulator, q: np.ndarray, *, p_WG, R_WB, p_WE,
-                           R_WE, q3) -> ConfigurationResidual:
+def configuration_residual(manip: AerialManipulator, q: np.ndarray, *, p_WG: np.ndarray,
+                           R_WB: np.ndarray, p_WE: np.ndarray, R_WE: np.ndarray,
+                           q3: float) -> ConfigurationResidual:
     plant = manip.plant
     ctx = plant.CreateDefaultContext()
     plant.SetPositions(ctx, q)

@@ -1,8 +1,8 @@
 """A MultibodyPlant's kinematic tree as flat numpy arrays, for the compiled control law.
 
-:mod:`aerial_drake.control.compiled` computes kinematics, Jacobians and the decomposition of Section II
-itself (numba), so that one control-law evaluation costs no Drake calls. It needs the plant's
-tree in plain arrays: :meth:`KinematicTree.from_plant` reads them once from a finalized
+:mod:`aerial_drake.control.compiled` computes kinematics, Jacobians and the decomposition of
+Section II itself (numba), so that one control-law evaluation costs no Drake calls. It needs the
+plant's tree in plain arrays: :meth:`KinematicTree.from_plant` reads them once from a finalized
 MultibodyPlant (double) and refuses, with :class:`UnsupportedTree`, what the kernels do not
 handle. The callers then keep Drake's own path (:mod:`aerial_drake.dynamics.decoupling`).
 

@@ -335,6 +335,7 @@ def helicopter_extent(variant: str = "rigid") -> HelicopterExtent:
     top 0.64 m (their outer rims), bottom 0.41 m (the skids)."""
     builder = DiagramBuilder()
     model = add_to_builder(builder, variant)
+    assert model.scene_graph is not None  # add_to_builder registers the plant with one
     plant, inspector = model.plant, model.scene_graph.model_inspector()
     ctx = plant.CreateDefaultContext()
     X_BW = plant.EvalBodyPoseInWorld(ctx, model.base_body).inverse()

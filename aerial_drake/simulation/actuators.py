@@ -18,8 +18,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.plant import Propeller, PropellerInfo
 from pydrake.multibody.tree import RigidBody
-from pydrake.systems.framework import Diagram, DiagramBuilder
-from pydrake.systems.framework import Context
+from pydrake.systems.framework import Context, Diagram, DiagramBuilder
 from pydrake.systems.primitives import ConstantValueSource, LinearSystem
 
 

@@ -25,18 +25,34 @@ import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
+from pydrake.multibody.plant import ExternallyAppliedSpatialForceMultiplexer
 from pydrake.systems.framework import Diagram, DiagramBuilder, InputPort, OutputPort
 from pydrake.systems.primitives import (
-    AffineSystem, Demultiplexer, LogVectorOutput, MatrixGain, Saturation, VectorLogSink)
-from pydrake.multibody.plant import ExternallyAppliedSpatialForceMultiplexer
+    AffineSystem,
+    Demultiplexer,
+    LogVectorOutput,
+    MatrixGain,
+    Saturation,
+    VectorLogSink,
+)
 
-from aerial_drake.simulation.actuators import (
-    ActuatorLag, PointWrenchApplier, free_body_wrench_map, lag_time_constant, make_base_actuator)
 from aerial_drake.control.controller import DecoupledController, make_controller
+from aerial_drake.robots.models import (
+    ROTOR_DIRECTIONS,
+    AerialManipulator,
+    add_to_builder,
+    make_plant,
+)
+from aerial_drake.simulation.actuators import (
+    ActuatorLag,
+    PointWrenchApplier,
+    free_body_wrench_map,
+    lag_time_constant,
+    make_base_actuator,
+)
 from aerial_drake.simulation.disturbances import add_wrench_source
-from aerial_drake.robots.models import ROTOR_DIRECTIONS, AerialManipulator, add_to_builder, make_plant
-from aerial_drake.trajectories.generator import ReferenceGenerator
 from aerial_drake.simulation.scenarios import Scenario
+from aerial_drake.trajectories.generator import ReferenceGenerator
 
 
 @dataclass
@@ -93,8 +109,8 @@ def input_limits(scenario: Scenario, model: AerialManipulator,
     return lower, upper
 
 
-def connect_actuation(builder: DiagramBuilder, sim: AerialManipulator, base_command,
-                      joint_command):
+def connect_actuation(builder: DiagramBuilder, sim: AerialManipulator, base_command: OutputPort,
+                      joint_command: OutputPort) -> OutputPort:
     """Wire ``[f, mu]`` (``base_command``, 4) and ``tau`` (``joint_command``) to the plant:
     the thrust and body torques as a body wrench at the helicopter frame (2) through Drake's
     ``Propeller``, the joint torques to the arm's actuation input. Returns the base wrench's
@@ -237,6 +253,7 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
         outputs["rotor_drive_torque"] = _add_rotor_drive(builder, sim, scenario)
 
     outputs["plant_state"] = state_out
+    assert sim.scene_graph is not None  # add_to_builder registers the plant with one
     outputs["query_object"] = sim.scene_graph.get_query_output_port()
     return ClosedLoop(diagram=None, simulated_plant=sim, controller_model=model,
                       controller=controller, reference=reference, lag=lag, n_arm=n,
@@ -269,8 +286,8 @@ def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: 
 
 #: The closed loop's outputs logged at every sample. The references are not among them: they
 #: are functions of time alone, recomputed after the run from the sample times by the same
-#: compiled code (:func:`aerial_drake.trajectories.paper.sample_reference`, equal to the last bit), so
-#: nothing evaluates them in the loop but the controller.
+#: compiled code (:func:`aerial_drake.trajectories.paper.sample_reference`, equal to the last
+#: bit), so nothing evaluates them in the loop but the controller.
 LOGGED_PORTS = ("plant_state", "command", "applied_command", "diagnostics", "rotor_drive_torque")
 
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from aerial_drake.control.law import diagnostics_slices
@@ -52,7 +54,7 @@ def compute_metrics(t: np.ndarray, diagnostics: np.ndarray, applied: np.ndarray,
     for k, (a, b) in enumerate(zip(edges[:-1], edges[1:])):
         last = k == len(edges) - 2
         mask = (t >= a) & ((t <= b) if last else (t < b))
-        phase = {"start_s": a, "end_s": b, "samples": int(mask.sum())}
+        phase: dict[str, Any] = {"start_s": a, "end_s": b, "samples": int(mask.sum())}
         if mask.any():
             for key, diag in _ERRORS.items():
                 e = diagnostics[mask, sl[diag]][:, 0]
@@ -101,9 +103,12 @@ def disturbance_response(t: np.ndarray, diagnostics: np.ndarray,
         later = [s for s in starts if s > start]
         end = min([stop + tail] + later)
         mask = (t >= start) & (t <= end)
-        ee_peak = float(ee[mask].max()) if mask.any() else None
-        com_peak = float(com[mask].max()) if mask.any() else None
-        ratio = ee_peak / com_peak if mask.any() and com_peak > 0 else None
+        ee_peak: float | None = None
+        com_peak: float | None = None
+        ratio: float | None = None
+        if mask.any():
+            ee_peak, com_peak = float(ee[mask].max()), float(com[mask].max())
+            ratio = ee_peak / com_peak if com_peak > 0 else None
         out.append({"target": target, "window_s": [start, stop], "evaluated_s": [start, end],
                     "ee_position_error_peak_m": ee_peak, "com_error_peak_m": com_peak,
                     "ee_to_com_peak_ratio": ratio})
@@ -118,7 +123,7 @@ def rotor_metrics(speeds: np.ndarray, drive_torque: np.ndarray, commanded: np.nd
         speeds: (N, k) rotor joint speeds (rad/s); drive_torque: (N, k) the drive's output
         (N m); commanded: (k) the speeds the drive holds (rad/s).
     """
-    out = {}
+    out: dict[str, dict] = {}
     if len(speeds) == 0:  # nothing logged (a run stopped at t = 0)
         return out
     for i, name in enumerate(names[:speeds.shape[1]]):

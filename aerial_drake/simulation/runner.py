@@ -7,27 +7,39 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Any, Callable, TextIO, cast
 
 import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
 from pydrake.math import RigidTransform, RollPitchYaw
-from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.multibody.plant import MultibodyPlant
+from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import Context
 from pydrake.systems.primitives import VectorLogSink
 
 from aerial_drake.control.compiled import compile_law
 from aerial_drake.control.law import (
-    DIAGNOSTICS_LAYOUT, AssumptionViolation, desired_attitude, desired_force)
-from aerial_drake.simulation.diagram import ClosedLoop, build_simulation, input_limits
+    DIAGNOSTICS_LAYOUT,
+    AssumptionViolation,
+    desired_attitude,
+    desired_force,
+)
 from aerial_drake.dynamics.equilibrium import solve_configuration
-from aerial_drake.simulation.metrics import (
-    compute_metrics, disturbance_response, limits_by_input, phase_edges, rotor_metrics)
 from aerial_drake.robots.models import (
-    ROTOR_DIRECTIONS, AerialManipulator, nominal_end_effector_offset)
-from aerial_drake.trajectories.paper import compile_reference, evaluate_reference, sample_reference
+    ROTOR_DIRECTIONS,
+    AerialManipulator,
+    nominal_end_effector_offset,
+)
+from aerial_drake.simulation.diagram import ClosedLoop, build_simulation, input_limits
+from aerial_drake.simulation.metrics import (
+    compute_metrics,
+    disturbance_response,
+    limits_by_input,
+    phase_edges,
+    rotor_metrics,
+)
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
+from aerial_drake.trajectories.paper import compile_reference, evaluate_reference, sample_reference
 
 
 class SimulationFailed(RuntimeError):
@@ -64,7 +76,8 @@ def reference_configuration(scenario: Scenario, model: AerialManipulator,
     # Joint limits are not imposed: the simulated plant does not enforce them, and at t = 0 the
     # paper's reference needs joint 6 about 0.19 rad past its 120 deg (docs/control.md).
     return solve_configuration(model, p_WG=x[0], R_WB=R_d, p_WE=ref.p_ed, R_WE=ref.R_ed,
-                               q3=ref.q3d, respect_joint_limits=False)
+                               q3=cast(float, ref.q3d),  # one instant: a scalar
+                               respect_joint_limits=False)
 
 
 #: How far (m) the desired end effector may stray from its nominal offset to the desired CoM,
@@ -280,7 +293,7 @@ def compile_kernels() -> None:
 
 
 def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
-                 progress: bool = True, stream=None,
+                 progress: bool = True, stream: TextIO | None = None,
                  configure: Callable | None = None,
                  realtime_rate: float | None = None,
                  zero_controller: bool = False) -> RunResult:
@@ -361,7 +374,8 @@ def write_outputs(result: RunResult, out_dir: str | Path) -> Path:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     names = json.dumps({"diagnostics": [list(x) for x in DIAGNOSTICS_LAYOUT]})
-    np.savez_compressed(out / "log.npz", layout=np.array(names), **result.log)
+    arrays: dict[str, Any] = dict(result.log)  # (typed Any: numpy's stub has a bool keyword)
+    np.savez_compressed(out / "log.npz", layout=np.array(names), **arrays)
     metrics = dict(result.metrics)
     metrics["completed"] = result.completed
     metrics["failure"] = result.failure

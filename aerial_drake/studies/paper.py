@@ -24,14 +24,15 @@ import json
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TextIO
 
 import numpy as np
 
+from aerial_drake.dynamics.equilibrium import UnreachablePose
 from aerial_drake.simulation.metrics import saturated_after_key
-from aerial_drake.viz.plots import Run, load_run, write_figures
 from aerial_drake.simulation.runner import SimulationFailed, run_scenario
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError, load_scenario
-from aerial_drake.dynamics.equilibrium import UnreachablePose
+from aerial_drake.viz.plots import Run, load_run, write_figures
 
 PAPER_SCENARIOS = ("nominal", "disturbed")
 
@@ -75,7 +76,8 @@ class PaperResult:
 
 
 def run_paper(out_dir: str | Path = "out/paper", duration: float | None = None, *,
-              seed: int | None = None, progress: bool = True, stream=None) -> PaperResult:
+              seed: int | None = None, progress: bool = True,
+              stream: TextIO | None = None) -> PaperResult:
     """Run the nominal and disturbed scenarios into ``out_dir/<name>/``, write Figs. 3-6 and
     ``summary.txt`` into ``out_dir``, and return the result (the table is printed by the
     command line, not here).
@@ -91,7 +93,7 @@ def run_paper(out_dir: str | Path = "out/paper", duration: float | None = None, 
     overrides = {"duration": duration} if duration is not None else None
     for name in PAPER_SCENARIOS:
         scenario = load_scenario(name, overrides=overrides)
-        if rng is not None:
+        if seed is not None:  # (and so rng)
             scenario = perturb_initial(scenario, seed, rng)
         if progress and stream is not None:
             stream.write(f"running '{name}' ({scenario.duration:g} s) -> {out / name}\n")

@@ -3,7 +3,6 @@
 import copy
 
 import numpy as np
-
 from pydrake.systems.framework import BasicVector, Context, Diagram, DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import Demultiplexer
 

@@ -188,7 +188,7 @@ class _Constants(typing.NamedTuple):
 
     @classmethod
     def from_params(cls, p: TrajectoryParams) -> "_Constants":
-        return cls(
+        return cls._make([
             *map(float, p.center),
             float(p.basic_amplitude),
             float(p.basic_frequency),
@@ -201,7 +201,7 @@ class _Constants(typing.NamedTuple):
             float(p.heading_initial),
             float(p.heading_rate),
             *map(float, p.com_offset),
-        )
+        ])
 
     def as_array(self) -> np.ndarray:
         """The constants as a float array, in field order (what the compiled code reads)."""

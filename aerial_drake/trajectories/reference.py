@@ -80,9 +80,9 @@ class ReferenceSample:
     w_ed: np.ndarray
     dw_ed: np.ndarray
     # Desired third joint angle and its derivatives (rad, rad/s, rad/s^2).
-    q3d: float
-    q3d_dot: float
-    q3d_ddot: float
+    q3d: typing.Union[float, np.ndarray]
+    q3d_dot: typing.Union[float, np.ndarray]
+    q3d_ddot: typing.Union[float, np.ndarray]
     # Heading direction b1d and its 1st and 2nd derivatives, rows (3, 3).
     b1d: np.ndarray
 

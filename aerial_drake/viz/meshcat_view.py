@@ -49,14 +49,24 @@ from pathlib import Path
 
 import numpy as np
 from pydrake.geometry import (
-    Cylinder, Meshcat, MeshcatCone, MeshcatParams, MeshcatVisualizer, MeshcatVisualizerParams,
-    Rgba, Role, Sphere)
+    Cylinder,
+    Meshcat,
+    MeshcatCone,
+    MeshcatParams,
+    MeshcatVisualizer,
+    MeshcatVisualizerParams,
+    Rgba,
+    Role,
+    Sphere,
+)
 from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import Context, DiagramBuilder, EventStatus, LeafSystem
 
 from aerial_drake.control.law import desired_attitude, desired_force
-from aerial_drake.simulation.diagram import ClosedLoop
 from aerial_drake.robots.models import AerialManipulator, helicopter_extent, make_plant
+from aerial_drake.simulation.diagram import ClosedLoop
+from aerial_drake.simulation.scenarios import Scenario
+from aerial_drake.trajectories.paper import sample_reference
 from aerial_drake.trajectories.reference import (
     COM_REFERENCE_SIZE,
     HEADING_REFERENCE_SIZE,
@@ -65,8 +75,6 @@ from aerial_drake.trajectories.reference import (
     unpack_heading_reference,
     unpack_task_reference,
 )
-from aerial_drake.trajectories.paper import sample_reference
-from aerial_drake.simulation.scenarios import Scenario
 
 #: Seconds between frames (live and recorded), for the robot and the overlays.
 PUBLISH_PERIOD = 0.02
@@ -247,7 +255,8 @@ class TrackingOverlay(LeafSystem):
                             int(round(scenario.duration * PATH_RATE)) + 1)
         ref = sample_reference(scenario.trajectory, times)
         self._ee_path, self._com_path = ref.p_ed.T.copy(), ref.com[:, 0].T.copy()
-        self._shown = {}  # arrow path -> visible, to send a visibility only when it changes
+        # arrow path -> visible, to send a visibility only when it changes
+        self._shown: dict[str, bool] = {}
 
         nx = simulated_plant.plant.num_positions() + simulated_plant.plant.num_velocities()
         self._state_port = self.DeclareVectorInputPort("plant_state", nx)

@@ -39,8 +39,8 @@ from matplotlib.patches import Patch
 
 from aerial_drake.control.law import diagnostics_slices
 from aerial_drake.simulation.metrics import INPUT_NAMES
-from aerial_drake.trajectories.reference import unpack_com_reference, unpack_task_reference
 from aerial_drake.simulation.scenarios import Scenario, load_scenario
+from aerial_drake.trajectories.reference import unpack_com_reference, unpack_task_reference
 
 FIGURE_NAMES = ("fig3_end_effector", "fig4_com", "fig5_orientation_errors", "fig6_inputs")
 FORMATS = ("png", "pdf")
@@ -128,7 +128,7 @@ def _shade_windows(axes, scenario: Scenario, t_end: float) -> list:
     """Shade the disturbance windows that start before ``t_end``, limit the time axis to
     [0, t_end]; return legend handles, one per window."""
     axes[0].set_xlim(0.0, max(t_end, 1e-3))
-    handles = {}
+    handles: dict[str, list] = {}
     for d in scenario.disturbances:
         if d.start >= t_end:
             continue
@@ -172,7 +172,7 @@ def _position_figure(nominal: Run, disturbed: Run | None, which: str, title: str
     """Figs. 3 and 4: desired and actual positions per axis, then the error norm (log)."""
     runs = _runs(nominal, disturbed)
     fig, axes = _new_figure(4, 9.5)
-    desired_drawn = []
+    desired_drawn: list[np.ndarray] = []
     for run, color, label in runs:
         desired, actual = getattr(run, which)()
         for i, ax in enumerate(axes[:3]):

@@ -14,8 +14,8 @@ from aerial_drake import analysis as dut
 from aerial_drake.control.controller import DecoupledController_, make_controller
 from aerial_drake.dynamics.equilibrium import UnreachablePose
 from aerial_drake.robots.models import make_plant
-from aerial_drake.trajectories.paper import TrajectoryParams, evaluate_reference
 from aerial_drake.simulation.scenarios import load_scenario
+from aerial_drake.trajectories.paper import TrajectoryParams, evaluate_reference
 
 
 @pytest.fixture(scope="module")

@@ -1,5 +1,6 @@
 """The compiled decomposition and law (aerial_drake.control.compiled) against the numpy reference
-implementation fed by Drake's kinematics (aerial_drake.dynamics.decoupling, aerial_drake.control.law)."""
+implementation fed by Drake's kinematics (aerial_drake.dynamics.decoupling,
+aerial_drake.control.law)."""
 
 import dataclasses
 
@@ -8,15 +9,15 @@ import pytest
 
 from aerial_drake.control import compiled as dut
 from aerial_drake.control.compiled.linalg import _min_eigenvalue_sym
-from aerial_drake.control.law import DIAGNOSTICS_SIZE, AssumptionViolation, diagnostics_slices
 from aerial_drake.control.controller import make_controller
+from aerial_drake.control.law import DIAGNOSTICS_SIZE, AssumptionViolation, diagnostics_slices
 from aerial_drake.dynamics.decoupling import DecoupledDynamics
-from aerial_drake.simulation.diagram import build_closed_loop
 from aerial_drake.dynamics.kinematic_tree import KinematicTree, UnsupportedTree
 from aerial_drake.robots.models import make_plant
-from aerial_drake.trajectories.paper import evaluate_reference
+from aerial_drake.simulation.diagram import build_closed_loop
 from aerial_drake.simulation.runner import reference_configuration
 from aerial_drake.simulation.scenarios import load_scenario
+from aerial_drake.trajectories.paper import evaluate_reference
 from chain_plant import make_random_chain
 from states import at_state, random_states, rel
 
@@ -119,8 +120,8 @@ def test_unsupported_plants_fall_back_to_the_reference_path(nominal):
 
 def _to_rpy_state(rpy, x):
     """The quaternion-base state x as the RPY plant's state (same velocities)."""
-    from pydrake.math import RollPitchYaw
     from pydrake.common.eigen_geometry import Quaternion
+    from pydrake.math import RollPitchYaw
     w = x[:4] / np.linalg.norm(x[:4])
     rpy_angles = RollPitchYaw(Quaternion(w)).vector()
     q = np.concatenate([rpy_angles, x[4:14]])

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from aerial_drake.control.law import Gains, GainMatrices, desired_attitude, unit_vector_derivatives
+from aerial_drake.control.law import GainMatrices, Gains, desired_attitude, unit_vector_derivatives
 from aerial_drake.dynamics.decoupling import hat, vee
 
 

@@ -8,12 +8,12 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
-from aerial_drake.control.law import AssumptionViolation
 from aerial_drake.control.controller import make_controller
+from aerial_drake.control.law import AssumptionViolation
 from aerial_drake.robots.models import make_plant
-from aerial_drake.trajectories.generator import ReferenceGenerator
 from aerial_drake.simulation.runner import SimulationFailed, reference_configuration, run_scenario
 from aerial_drake.simulation.scenarios import load_scenario
+from aerial_drake.trajectories.generator import ReferenceGenerator
 
 PERIOD = 1e-3
 

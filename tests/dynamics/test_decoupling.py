@@ -10,7 +10,6 @@ from chain_plant import make_random_chain
 from states import at_state, random_states, rel
 
 
-
 @pytest.fixture(scope="module", params=["model", "chain"])
 def dut(request):
     plant = make_plant("rigid").plant if request.param == "model" else make_random_chain(3)

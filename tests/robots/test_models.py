@@ -100,7 +100,6 @@ def test_arm_joints_and_actuators(manip):
 
 def test_rotors():
     manip = dut.make_plant("rotors")
-    plant = manip.plant
     assert [j.name() for j in manip.rotor_joints] == ["rotor_left_joint", "rotor_right_joint"]
     assert [a.effort_limit() for a in manip.rotor_actuators] == [100.0, 100.0]
     for joint in manip.rotor_joints:

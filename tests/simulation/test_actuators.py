@@ -1,5 +1,6 @@
-"""Tests of aerial_drake.simulation.actuators' PointWrenchApplier: the wrench it hands the plant (at any
-pose of the body), and that it follows its input (time-varying sources, several contexts)."""
+"""Tests of aerial_drake.simulation.actuators' PointWrenchApplier: the wrench it hands the plant
+(at any pose of the body), and that it follows its input (time-varying sources, several
+contexts)."""
 
 import numpy as np
 import pytest
@@ -8,9 +9,9 @@ from pydrake.multibody.math import SpatialForce
 from pydrake.multibody.plant import ExternallyAppliedSpatialForce
 from pydrake.systems.framework import DiagramBuilder
 
+from aerial_drake.robots.models import make_plant
 from aerial_drake.simulation import actuators as dut
 from aerial_drake.simulation.disturbances import add_wrench_source
-from aerial_drake.robots.models import make_plant
 from aerial_drake.simulation.scenarios import Disturbance
 
 P_BoQ_B = np.array([0.01, -0.02, 0.15])

@@ -12,12 +12,11 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
 from aerial_drake.robots import models
+from aerial_drake.robots.models import ROTOR_DIRECTIONS
 from aerial_drake.simulation.actuators import lag_time_constant
 from aerial_drake.simulation.diagram import _add_rotor_drive, build_closed_loop
 from aerial_drake.simulation.runner import run_scenario
 from aerial_drake.simulation.scenarios import load_scenario
-
-from aerial_drake.robots.models import ROTOR_DIRECTIONS
 
 ROTOR_SPEEDS = 26.0 * np.pi * np.array(ROTOR_DIRECTIONS)  # Table I: +-26 pi rad/s
 

@@ -1,5 +1,5 @@
-"""Tests of aerial_drake.simulation.runner's simulation loop: where it pauses, that pausing changes no
-number, progress lines, a diverging plant, and the references it logs."""
+"""Tests of aerial_drake.simulation.runner's simulation loop: where it pauses, that pausing
+changes no number, progress lines, a diverging plant, and the references it logs."""
 
 import io
 import json
@@ -10,8 +10,8 @@ from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 
 from aerial_drake.simulation import runner as dut
 from aerial_drake.simulation.diagram import build_simulation
-from aerial_drake.trajectories.generator import ReferenceGenerator
 from aerial_drake.simulation.scenarios import load_scenario
+from aerial_drake.trajectories.generator import ReferenceGenerator
 
 DURATION = 2.5
 

@@ -76,10 +76,11 @@ def test_bad_disturbance(tmp_path):
 def test_assumption_2_vanishing_thrust():
     """A free-falling CoM reference with zero error asks for f_d = 0: Assumption 2."""
     import numpy as np
-    from aerial_drake.robots.models import make_plant
+
     from aerial_drake.control.controller import make_controller
-    from aerial_drake.trajectories.paper import evaluate_reference
+    from aerial_drake.robots.models import make_plant
     from aerial_drake.simulation.runner import reference_configuration
+    from aerial_drake.trajectories.paper import evaluate_reference
 
     s = load_scenario("nominal")
     model = make_plant("rigid")

@@ -13,12 +13,17 @@ from matplotlib.image import imread
 from pydrake.common.yaml import yaml_dump_typed
 
 from aerial_drake import cli
+from aerial_drake.control.law import diagnostics_slices
 from aerial_drake.robots import models
+from aerial_drake.simulation.metrics import (
+    INPUT_NAMES,
+    disturbance_response,
+    limits_by_input,
+    rotor_metrics,
+)
+from aerial_drake.simulation.scenarios import Disturbance, load_scenario
 from aerial_drake.studies import paper as dut
 from aerial_drake.viz import plots
-from aerial_drake.control.law import diagnostics_slices
-from aerial_drake.simulation.metrics import INPUT_NAMES, disturbance_response, limits_by_input, rotor_metrics
-from aerial_drake.simulation.scenarios import Disturbance, load_scenario
 
 
 # --- The disturbed scenario -----------------------------------------------------------------

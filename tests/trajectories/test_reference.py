@@ -1,5 +1,5 @@
-"""Tests of aerial_drake.trajectories.reference: the paper's trajectory (28)-(33), its derivatives and the
-Drake source system."""
+"""Tests of aerial_drake.trajectories: the paper's trajectory (28)-(33) (paper), its derivatives,
+the packed vectors (reference) and the Drake source system (generator)."""
 
 import math
 

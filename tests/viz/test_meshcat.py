@@ -22,15 +22,20 @@ import pytest
 from pydrake.common.eigen_geometry import Quaternion
 from pydrake.math import RotationMatrix
 
-from aerial_drake.viz import meshcat_view as dut
 from aerial_drake.cli import main as cli_main
 from aerial_drake.control.law import diagnostics_slices
 from aerial_drake.robots.models import make_plant
-from aerial_drake.trajectories.paper import sample_reference
 from aerial_drake.simulation.runner import run_scenario
 from aerial_drake.simulation.scenarios import Disturbance, load_scenario, shipped_scenarios
+from aerial_drake.trajectories.paper import sample_reference
+from aerial_drake.viz import meshcat_view as dut
 from aerial_drake.viz.screenshot import (
-    colourful_fraction, find_chromium, open_page, replay_time_script, screenshot)
+    colourful_fraction,
+    find_chromium,
+    open_page,
+    replay_time_script,
+    screenshot,
+)
 
 DURATION = 0.3  # s
 #: Robot paths MeshcatVisualizer draws: /drake/visualizer/<model instance>/<body>.

@@ -5,10 +5,10 @@ The reference implementation is the numpy code of :mod:`aerial_drake.dynamics.de
 (``Linearize``) and is the oracle the tests hold this package against. This package computes the
 same quantities, with the same formulas in the same order, but from its own forward kinematics
 (:class:`~aerial_drake.dynamics.kinematic_tree.KinematicTree`), in compiled loops over small
-fixed-size arrays: one evaluation of the law costs tens of microseconds instead of about two milliseconds
-of numpy calls on 3- to 13-element arrays. See ``docs/performance.md``. (One quantity takes
-another route to the same value: sigma_min(J3) of Assumption 1, from the smallest eigenvalue of
-J3^T J3 as there, by :func:`.linalg._min_eigenvalue_sym`.)
+fixed-size arrays: one evaluation of the law costs tens of microseconds instead of about two
+milliseconds of numpy calls on 3- to 13-element arrays. See ``docs/performance.md``. (One
+quantity takes another route to the same value: sigma_min(J3) of Assumption 1, from the
+smallest eigenvalue of J3^T J3 as there, by :func:`.linalg._min_eigenvalue_sym`.)
 
 An evaluation of the law allocates nothing. :class:`CompiledLaw` packs the tree, the
 end-effector frame, the gains and the limits into one float and one integer array at

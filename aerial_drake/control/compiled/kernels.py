@@ -24,10 +24,32 @@ from collections import namedtuple
 
 import numpy as np
 
-from aerial_drake.dynamics.kinematic_tree import FREE
+from aerial_drake.control.compiled.kinematics import (
+    _column6,
+    _jacobian_derivative,
+    _kinematics,
+    _row6,
+    _unpack_tree,
+)
+from aerial_drake.control.compiled.linalg import (
+    _copy,
+    _cross_at,
+    _cross_into,
+    _dot,
+    _hat_into,
+    _inv_into,
+    _min_eigenvalue_sym,
+    _mm_into,
+    _mtm_into,
+    _mtv_into,
+    _mv_into,
+    _norm,
+    _solve_into,
+    _vee_into,
+    _zero,
+)
 from aerial_drake.control.compiled.views import _forceinline, _inline, _jit, _mat, _mats, _vec
-from aerial_drake.control.compiled.linalg import _copy, _cross_at, _cross_into, _dot, _hat_into, _inv_into, _min_eigenvalue_sym, _mm_into, _mtm_into, _mtv_into, _mv_into, _norm, _solve_into, _vee_into, _zero
-from aerial_drake.control.compiled.kinematics import _column6, _jacobian_derivative, _kinematics, _row6, _unpack_tree
+from aerial_drake.dynamics.kinematic_tree import FREE
 
 #: Status codes of the law kernel.
 OK, ASSUMPTION_2, ASSUMPTION_1, NONFINITE = 0, 1, 2, 3

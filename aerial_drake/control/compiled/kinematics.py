@@ -11,10 +11,9 @@ from collections import namedtuple
 
 import numpy as np
 
-from aerial_drake.dynamics.kinematic_tree import FREE, REVOLUTE, KinematicTree
-from aerial_drake.control.compiled.views import _inline, _jit, _mat, _mats, _vec
 from aerial_drake.control.compiled.linalg import _copy, _copy_vec
-
+from aerial_drake.control.compiled.views import _inline, _jit, _mat, _mats, _vec
+from aerial_drake.dynamics.kinematic_tree import FREE, REVOLUTE, KinematicTree
 
 #: The arrays of :class:`KinematicTree` (parents before children), and each body's Jacobian
 #: columns: ``cols[b, :num_cols[b]]``, the velocities of its ancestors' joints from the body up,

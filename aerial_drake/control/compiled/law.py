@@ -10,6 +10,8 @@ import sys
 import numpy as np
 from numba import types
 
+from aerial_drake.control.compiled.kernels import _decompose, _law, _workspace_size
+from aerial_drake.control.compiled.kinematics import _pack_tree
 from aerial_drake.control.law import DIAGNOSTICS_SIZE
 from aerial_drake.dynamics.kinematic_tree import KinematicTree
 from aerial_drake.trajectories.reference import (
@@ -19,8 +21,6 @@ from aerial_drake.trajectories.reference import (
     unpack_heading_reference,
     unpack_task_reference,
 )
-from aerial_drake.control.compiled.kinematics import _pack_tree
-from aerial_drake.control.compiled.kernels import _decompose, _law, _workspace_size
 
 # --- Python entry points ---------------------------------------------------------------------
 
@@ -51,7 +51,8 @@ def pack_gains(K, gravity: float) -> np.ndarray:
 def law_cache_is_cold() -> bool:
     """Whether numba's cache holds no compiled law yet (the first use after installing)."""
     try:
-        return not os.path.exists(_law._cache._cache_file._index_path)
+        # numba's internals (untyped): guarded by the except below.
+        return not os.path.exists(_law._cache._cache_file._index_path)  # type: ignore[attr-defined]
     except AttributeError:  # numba internals moved: say warm (no note, no restart)
         return False
 

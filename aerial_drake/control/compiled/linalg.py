@@ -9,7 +9,6 @@ import math
 
 from aerial_drake.control.compiled.views import _inline, _jit
 
-
 # --- small dense linear algebra (explicit loops: no BLAS/LAPACK, hence no SciPy) -------------
 
 @_jit
