@@ -11,7 +11,8 @@ import pytest  # noqa: E402
 @pytest.fixture(scope="session")
 def full_paper(tmp_path_factory):
     """`aerial-drake run paper` in full (nominal and disturbed, 15 s each), run once per test
-    session: the paper's claims are tested on it in test_paper.py and test_closed_loop.py."""
+    session: the paper's claims are tested on it in tests/studies/test_paper.py and
+    tests/simulation/test_closed_loop.py."""
     from aerial_drake.studies.paper import run_paper
 
     out = tmp_path_factory.mktemp("paper")

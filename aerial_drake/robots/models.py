@@ -11,7 +11,7 @@ The arm and its weld under the helicopter come from ``arm_mount.dmd.yaml`` for b
 and that file also holds the nominal hover posture (the arm's default joint positions).
 The modelling choices and their numbers are in ``docs/models.md``.
 
-Coordinate order (Drake's, checked by ``tests/test_models.py``):
+Coordinate order (Drake's, checked by ``tests/robots/test_models.py``):
 
 - ``"rigid"``: q = [base (7: qw qx qy qz x y z, or 6: roll pitch yaw x y z), arm (7)],
   v = [w_WB (3, in World), v_WBo (3, in World), arm (7)].

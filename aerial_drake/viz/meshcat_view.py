@@ -22,7 +22,7 @@ What :class:`TrackingOverlay` draws, under ``/drake/overlays`` (``OVERLAY_PATHS`
   recomputed here from the references and the plant state with the controller's own formulas:
   f_d of (10) from the actual CoM position and velocity, then
   :func:`aerial_drake.control.law.desired_attitude` with b1d. The frames fall on the controller's
-  1 kHz samples, so it is the controller's R_d of that sample (``tests/test_meshcat.py``
+  1 kHz samples, so it is the controller's R_d of that sample (``tests/viz/test_meshcat.py``
   rebuilds the logged e_R from it); the diagnostics port carries e_R only, and evaluating it
   here would run the control law an extra time per frame;
 - the disturbance forces while a window is active, as arrows starting at their points of
@@ -34,7 +34,7 @@ overlays animate in ``replay.html`` as the robot does.
 
 Publishing every ``PUBLISH_PERIOD`` = 20 ms (50 Hz): a multiple of the 1 ms controller and log
 periods, so watching adds no integrator step and leaves the logged numbers unchanged
-(``tests/test_meshcat.py`` holds a watched and an unwatched run equal). At 26 pi rad/s the
+(``tests/viz/test_meshcat.py`` holds a watched and an unwatched run equal). At 26 pi rad/s the
 rotors turn 94 deg per frame, under the 180 deg of the two-bladed rotor's symmetry, so the
 replay's interpolation shows them turning the right way.
 

@@ -111,7 +111,7 @@ def test_rotors():
         I = M.CalcRotationalInertia().CopyToFullMatrix3()
         np.testing.assert_allclose(I, np.diag([0.061, 0.061, 0.12]), atol=1e-15)
         np.testing.assert_allclose(joint.revolute_axis(), [0, 0, 1])
-    # Their angular momentum when spinning: tests/test_rotors.py.
+    # Their angular momentum when spinning: tests/simulation/test_rotors.py.
 
 
 @pytest.mark.parametrize("variant", dut.PLANT_VARIANTS)

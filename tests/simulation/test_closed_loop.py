@@ -105,7 +105,7 @@ def test_metrics_file(nominal):
         assert phase["min_sigma_min_J3"] > 0.05
         assert phase["min_f_d_norm_N"] > 100.0
         assert set(phase["saturated_s"]) == set(INPUT_NAMES)
-    # That inputs saturate only in the first 0.5 s: tests/test_paper.py.
+    # That inputs saturate only in the first 0.5 s: tests/studies/test_paper.py.
     assert m["real_time_factor"] > 0 and m["wall_time_s"] > 0
     assert m["controller_evaluations"] == pytest.approx(15001, abs=2)
     log = np.load(nominal.out_dir / "log.npz")
