@@ -211,15 +211,19 @@ def _check_models_load_from(site, tmp_path):
     script = (
         "from aerial_drake.robots.resources import model_directory\n"
         "from aerial_drake.robots.models import make_plant\n"
+        "from aerial_drake.simulation.scenarios import shipped_scenarios\n"
         "print(model_directory())\n"
         "print(make_plant('rigid').total_mass(), make_plant('rotors').total_mass())\n"
+        "print(','.join(shipped_scenarios()))\n"
     )
     out = subprocess.run(
         [sys.executable, "-c", script], check=True, capture_output=True, text=True,
         cwd=tmp_path, env={**os.environ, "PYTHONPATH": str(site)},
     ).stdout.split()
     assert Path(out[0]).resolve() == installed.resolve()
-    assert [float(m) for m in out[1:]] == pytest.approx([54.8, 54.8])
+    assert [float(m) for m in out[1:3]] == pytest.approx([54.8, 54.8])
+    # The scenario YAML files ship beside their module (package-data).
+    assert out[3].split(",") == ["disturbed", "nominal", "orbit"]
 
 
 def test_model_directory_in_installed_layout(tmp_path):
