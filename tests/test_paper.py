@@ -77,7 +77,8 @@ def test_disturbance_response_peaks_and_windows():
     assert first["ee_to_com_peak_ratio"] == pytest.approx(0.008)
     assert out[1]["evaluated_s"] == [9.0, 11.0] and out[1]["ee_position_error_peak_m"] == 0.1
     assert out[3]["ee_position_error_peak_m"] is None  # not reached by the log
-    json.dumps(out)
+    # Strict JSON (no NaN), and nothing lost on the way through it.
+    assert json.loads(json.dumps(out, allow_nan=False)) == out
 
 
 def test_rotor_metrics_and_limits_by_input():
