@@ -5,7 +5,7 @@ package's folders, and modules stay small.
 Layers, top to bottom (a module imports from its own subpackage and from layers below only):
 
     cli, __main__ -> studies -> viz | analysis -> simulation -> control -> trajectories
-    -> dynamics -> robots
+    -> dynamics -> robots -> drake_compat
 
 ``viz`` and ``analysis`` share a layer and must not import each other. ``trajectories`` sits
 under ``control``: the controller reads the packed reference vectors whose layout the
@@ -16,7 +16,11 @@ import ast
 from pathlib import Path
 
 import pytest
-import tomllib
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10: the same parser, as the tomli package
+    import tomli as tomllib
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGE = ROOT / "aerial_drake"
@@ -24,6 +28,8 @@ PACKAGE = ROOT / "aerial_drake"
 #: Layer rank of each top-level part of the package: higher may import lower, never higher.
 #: The same rank in different parts (viz, analysis) may not import each other either.
 RANKS = {
+    # Every difference between the supported Drake releases, under everything else.
+    "drake_compat": -1,
     "robots": 0,
     "dynamics": 1,
     "trajectories": 2,

@@ -94,8 +94,7 @@ def lyapunov_scenario(base: Scenario | str = "nominal", *,
         actuation=dataclasses.replace(scenario.actuation, saturate=False, lag_rise_time=0.0),
         simulator=SimulatorConfig(
             integration_scheme="runge_kutta3", max_step_size=max_step_size,
-            accuracy=accuracy, use_error_control=True, target_realtime_rate=0.0,
-            publish_every_time_step=False)).validate()
+            accuracy=accuracy, use_error_control=True, target_realtime_rate=0.0)).validate()
 
 
 @dataclass

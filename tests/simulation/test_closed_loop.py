@@ -19,9 +19,22 @@ from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
 
 SL = diagnostics_slices()
 ERRORS = ("ee_position_error", "ee_orientation_error", "com_error", "base_attitude_error")
-# Issue 3: after 5 s, below 1 mm, 1e-3 rad, 1 mm, 1e-3 rad.
-CONVERGED = {"ee_position_error": 1e-3, "ee_orientation_error": 1e-3, "com_error": 1e-3,
-             "base_attitude_error": 1e-3}
+# Largest error after 5 s without disturbances (m, rad). The requirement is 1 mm / 1e-3 rad;
+# the bounds sit 2-3x above what the law achieves (measured, drake 1.51.1 and 1.58.0 alike), so
+# a law that still converges but worse (a wrong feed-forward, a lost coupling term) fails.
+CONVERGED = {
+    "ee_position_error": 1.5e-4,    # measured 5.61e-5 (2.7x)
+    "ee_orientation_error": 1e-4,   # measured 3.35e-5 (3.0x)
+    "com_error": 1e-3,              # measured 5.78e-4 (1.7x; the requirement)
+    "base_attitude_error": 1e-3,    # measured 4.16e-4 (2.4x)
+}
+# The same on the orbit scenario (second trajectory).
+CONVERGED_ORBIT = {
+    "ee_position_error": 1e-4,      # measured 3.58e-5 (2.8x)
+    "ee_orientation_error": 3e-5,   # measured 1.04e-5 (2.9x)
+    "com_error": 1e-3,              # measured 4.15e-4 (2.4x)
+    "base_attitude_error": 8e-4,    # measured 2.89e-4 (2.8x)
+}
 
 
 def max_after(result, name, t0, t1=np.inf):
@@ -53,9 +66,9 @@ def test_nominal_converges_without_disturbances(undisturbed, error):
 def test_second_trajectory_converges():
     result = run_scenario(load_scenario("orbit", overrides={"duration": 10.0}), progress=False)
     for error in ERRORS:
-        assert max_after(result, error, 5.0) < CONVERGED[error], error
+        assert max_after(result, error, 5.0) < CONVERGED_ORBIT[error], error
     # q3 is held at the orbit's q3_desired = 0.2 rad, not the paper's 0.
-    assert abs(result.log["diagnostics"][-1, SL["y_tilde"]][6]) < 1e-4
+    assert abs(result.log["diagnostics"][-1, SL["y_tilde"]][6]) < 6e-7  # measured 2.09e-7
 
 
 def test_task_lyapunov_function_never_increases_with_continuous_feedback():
@@ -68,7 +81,7 @@ def test_task_lyapunov_function_never_increases_with_continuous_feedback():
     scenario.actuation.saturate = False
     result = run_scenario(scenario, progress=False)
     V = result.log["diagnostics"][:, SL["V_task"]][:, 0]
-    assert V[-1] < 1e-3 * V[0]
+    assert V[-1] < 3e-4 * V[0]  # measured 1.14e-4 V[0] after 3 s (2.6x)
     # Integrator accuracy: RK3 at 1 ms has a local error ~1e-9 relative on these dynamics.
     assert np.diff(V).max() <= 1e-9 * V[0]
 
@@ -77,38 +90,61 @@ def test_disturbances_stay_bounded_and_reconverge(nominal):
     m = nominal.metrics
     phases = {(p["start_s"], p["end_s"]): p for p in m["phases"]}
     assert set(phases) == {(0.0, 4.0), (4.0, 5.0), (5.0, 9.0), (9.0, 10.0), (10.0, 15.0)}
-    # Bounded during the windows.
-    assert phases[(4.0, 5.0)]["com_position_error_m"]["max"] < 0.5
-    assert phases[(4.0, 5.0)]["ee_position_error_m"]["max"] < 0.01
-    assert phases[(9.0, 10.0)]["ee_position_error_m"]["max"] < 0.2
-    assert phases[(9.0, 10.0)]["ee_orientation_error_rad"]["max"] < 0.3
+    # Bounded during the windows (measured values beside each bound).
+    assert phases[(4.0, 5.0)]["com_position_error_m"]["max"] < 0.44   # 0.220 m
+    assert phases[(4.0, 5.0)]["ee_position_error_m"]["max"] < 4e-3    # 1.66e-3 m
+    assert phases[(9.0, 10.0)]["ee_position_error_m"]["max"] < 0.2    # 0.137 m
+    assert phases[(9.0, 10.0)]["ee_orientation_error_rad"]["max"] < 0.3  # 0.127 rad
     # Re-converged by the end of the following phase (4 s, or 5 s after the second window):
-    # below 5 % of the window's peak. The CoM and attitude recover with Table II's slowest
-    # closed-loop mode, k_R / k_w = 1.25 1/s (design notes 6).
-    for window, after, end in (((4.0, 5.0), 5.0, 9.0), ((9.0, 10.0), 10.0, 15.0)):
-        for key, diag in (("ee_position_error_m", "ee_position_error"),
-                          ("com_position_error_m", "com_error"),
-                          ("base_attitude_error_rad", "base_attitude_error")):
-            peak = phases[window][key]["max"]
-            assert max_after(nominal, diag, end - 0.5, end) < 0.05 * peak, (window, key)
+    # the last 0.5 s below this fraction of the window's peak. The CoM and attitude recover
+    # with Table II's slowest closed-loop mode, k_R / k_w = 1.25 1/s (docs/analysis.md).
+    recovered = {  # (window, metric): bound on tail / peak (measured)
+        ((4.0, 5.0), "ee_position_error_m"): 0.035,       # 0.0142
+        ((4.0, 5.0), "com_position_error_m"): 0.05,       # 0.0306
+        ((4.0, 5.0), "base_attitude_error_rad"): 0.03,    # 0.0124
+        ((9.0, 10.0), "ee_position_error_m"): 0.009,      # 0.00355
+        ((9.0, 10.0), "com_position_error_m"): 0.024,     # 0.00948
+        ((9.0, 10.0), "base_attitude_error_rad"): 0.009,  # 0.00355
+    }
+    diag_of = {"ee_position_error_m": "ee_position_error", "com_position_error_m": "com_error",
+               "base_attitude_error_rad": "base_attitude_error"}
+    ends = {(4.0, 5.0): 9.0, (9.0, 10.0): 15.0}
+    for (window, key), bound in recovered.items():
+        peak = phases[window][key]["max"]
+        end = ends[window]
+        assert max_after(nominal, diag_of[key], end - 0.5, end) < bound * peak, (window, key)
 
 
 def test_metrics_file(nominal):
     m = json.loads((nominal.out_dir / "metrics.json").read_text())
     assert m["completed"] is True and m["failure"] is None
     assert len(m["phases"]) == 5
-    for phase in m["phases"]:
-        for key in ("ee_position_error_m", "ee_orientation_error_rad", "com_position_error_m",
-                    "base_attitude_error_rad"):
+    log = np.load(nominal.out_dir / "log.npz")
+    t = log["t"]
+    for i, phase in enumerate(m["phases"]):
+        # The phase's samples: [start, end), the last phase closed at the run's end.
+        last = i == len(m["phases"]) - 1
+        mask = (t >= phase["start_s"]) & ((t <= phase["end_s"]) if last else
+                                          (t < phase["end_s"]))
+        assert phase["samples"] == int(mask.sum())
+        for key, diag in (("ee_position_error_m", "ee_position_error"),
+                          ("ee_orientation_error_rad", "ee_orientation_error"),
+                          ("com_position_error_m", "com_error"),
+                          ("base_attitude_error_rad", "base_attitude_error")):
             assert set(phase[key]) == {"rms", "max"}
-            assert 0 <= phase[key]["rms"] <= phase[key]["max"]
-        assert phase["min_sigma_min_J3"] > 0.05
-        assert phase["min_f_d_norm_N"] > 100.0
+            e = log["diagnostics"][mask, SL[diag]][:, 0]
+            # Recomputed from the log: an RMS that is a mean, or a max over the wrong
+            # samples, fails here.
+            assert phase[key]["rms"] == pytest.approx(np.sqrt(np.mean(e ** 2)), rel=1e-12)
+            assert phase[key]["max"] == pytest.approx(e.max(), rel=1e-12)
+        assert phase["min_sigma_min_J3"] > 0.05   # measured 0.0987 (9-10 s), 2.0x
+        assert phase["min_f_d_norm_N"] > 250.0    # measured 517.7 N (9-10 s), 2.1x
         assert set(phase["saturated_s"]) == set(INPUT_NAMES)
     # That inputs saturate only in the first 0.5 s: tests/studies/test_paper.py.
-    assert m["real_time_factor"] > 0 and m["wall_time_s"] > 0
+    assert m["wall_time_s"] > 0
+    assert m["real_time_factor"] == pytest.approx(m["simulated_time_s"] / m["wall_time_s"],
+                                                  rel=1e-9)
     assert m["controller_evaluations"] == pytest.approx(15001, abs=2)
-    log = np.load(nominal.out_dir / "log.npz")
     for key in ("t", "plant_state", "command", "applied_command", "diagnostics",
                 "com_reference", "task_reference", "heading_reference"):
         assert len(log[key]) == len(log["t"])

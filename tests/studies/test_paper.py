@@ -83,7 +83,8 @@ def test_disturbance_response_peaks_and_windows():
     assert first["ee_to_com_peak_ratio"] == pytest.approx(0.008)
     assert out[1]["evaluated_s"] == [9.0, 11.0] and out[1]["ee_position_error_peak_m"] == 0.1
     assert out[3]["ee_position_error_peak_m"] is None  # not reached by the log
-    json.dumps(out)
+    # Strict JSON (no NaN), and nothing lost on the way through it.
+    assert json.loads(json.dumps(out, allow_nan=False)) == out
 
 
 def test_rotor_metrics_and_limits_by_input():
@@ -158,18 +159,70 @@ def test_metrics_have_limits_and_rotors(short_paper):
 
 
 @pytest.mark.parametrize("name", plots.FIGURE_NAMES)
-def test_figures_are_written_and_drawn(short_paper, name):
+def test_figures_are_written(short_paper, name):
     _, folder, _ = short_paper
     png, pdf = folder / f"{name}.png", folder / f"{name}.pdf"
-    assert png.stat().st_size > 20_000
-    assert pdf.read_bytes()[:4] == b"%PDF" and pdf.stat().st_size > 10_000
-    image = imread(png)[..., :3]
+    assert pdf.read_bytes()[:4] == b"%PDF"
+    image = imread(png)[..., :3]  # a PNG that decodes, at the figure's size
     assert image.shape[0] > 600 and image.shape[1] > 900
-    non_white = np.any(image < 0.97, axis=-1).mean()
-    assert non_white > 0.05  # axes, labels and curves, not a blank canvas
-    if name in ("fig3_end_effector", "fig4_com"):
-        red = (image[..., 0] > 0.7) & (image[..., 1] < 0.3) & (image[..., 2] < 0.3)
-        assert red.sum() > 200  # the desired trajectory is drawn
+    assert image.std() > 0.05  # not one flat colour
+
+
+def _lines(ax):
+    """(x, y) of each Line2D plotted on ``ax`` with data (limit lines have two points)."""
+    return [(np.asarray(line.get_xdata(), float), np.asarray(line.get_ydata(), float))
+            for line in ax.get_lines() if len(line.get_xdata()) > 2]
+
+
+def test_figures_plot_the_logged_data(short_paper):
+    """Read the curves back from each figure and hold them against the log and the model:
+    the actual positions from the plant state (Drake's kinematics, not plots' own
+    derivation), the desired ones from the logged reference, errors and inputs as logged."""
+    _, folder, _ = short_paper
+    rigid = models.make_plant("rigid")
+    context = rigid.plant.CreateDefaultContext()
+    runs = [plots.load_run(folder / name) for name in dut.PAPER_SCENARIOS]
+    sl = diagnostics_slices()
+    for which, figure in (("end_effector", plots.figure_end_effector),
+                          ("com", plots.figure_com)):
+        fig = figure(*runs)
+        for run in runs:
+            sim = models.make_plant(run.scenario.plant_variant)
+            actual = np.empty((len(run.t), 3))
+            for k, x in enumerate(run.log["plant_state"][:, sim.rigid_state_indices]):
+                rigid.plant.SetPositionsAndVelocities(context, x)
+                actual[k] = (rigid.end_effector_frame.CalcPoseInWorld(context).translation()
+                             if which == "end_effector"
+                             else rigid.plant.CalcCenterOfMassPositionInWorld(context))
+            desired = getattr(run, which)()[0]
+            for i, ax in enumerate(fig.axes[:3]):
+                curves = _lines(ax)
+                assert any(np.allclose(x, run.t) and np.allclose(y, actual[:, i], atol=1e-9)
+                           for x, y in curves), (which, run.name, "actual", i)
+                assert any(np.allclose(y, desired[:, i], atol=1e-12) for _, y in curves), \
+                    (which, run.name, "desired", i)
+            # The error panel: |actual - desired| in mm (floored at 1e-4 mm for the log axis).
+            error = np.maximum(1e3 * np.linalg.norm(actual - desired, axis=1), 1e-4)
+            assert any(np.allclose(y, error, rtol=1e-6, atol=1e-6)
+                       for _, y in _lines(fig.axes[3])), (which, run.name, "error")
+    fig = plots.figure_orientation_errors(*runs)
+    for ax, key in zip(fig.axes, ("base_attitude_error", "ee_orientation_error")):
+        for run in runs:
+            expected = run.log["diagnostics"][:, sl[key]][:, 0]
+            assert any(np.array_equal(y, expected) for _, y in _lines(ax)), (key, run.name)
+    run = runs[0]
+    fig = plots.figure_inputs(run)
+    u = run.log["applied_command"]
+    for ax, columns in zip(fig.axes, (range(0, 1), range(1, 4), range(4, u.shape[1]))):
+        plotted = _lines(ax)
+        assert len(plotted) == len(columns)
+        for (_, y), c in zip(plotted, columns):
+            np.testing.assert_array_equal(y, u[:, c])
+    # Dashed limits: every joint's effort limit, and no other value, on the torque panel.
+    effort = models.make_plant("rigid").arm_effort_limits()
+    drawn = {round(abs(float(line.get_ydata()[0])), 9) for line in fig.axes[2].get_lines()
+             if len(line.get_xdata()) == 2}
+    assert drawn == {round(float(e), 9) for e in effort}
 
 
 def test_actual_positions_in_the_plots_match_the_model(short_paper):
@@ -250,11 +303,12 @@ def test_nominal_end_effector_barely_feels_the_force_on_the_helicopter(full_pape
     response = full_paper.runs["nominal"].metrics["disturbance_response"]
     helicopter = next(r for r in response if r["target"] == "helicopter")
     assert helicopter["window_s"] == [4.0, 5.0]
-    assert helicopter["ee_to_com_peak_ratio"] < 0.2
-    assert helicopter["com_error_peak_m"] > 0.05  # the force does move the CoM
+    assert helicopter["ee_to_com_peak_ratio"] < 0.02  # measured 0.00681 (2.9x)
+    assert helicopter["com_error_peak_m"] > 0.12  # the force does move the CoM: 0.244 m
     # Also over the window alone (the metrics' 4-5 s phase).
     w = next(p for p in full_paper.runs["nominal"].metrics["phases"] if p["start_s"] == 4.0)
-    assert w["ee_position_error_m"]["max"] < 0.2 * w["com_position_error_m"]["max"]
+    # measured 0.00755 (2.6x)
+    assert w["ee_position_error_m"]["max"] < 0.02 * w["com_position_error_m"]["max"]
 
 
 def test_nominal_inputs_saturate_only_in_the_first_half_second(full_paper):
@@ -269,38 +323,55 @@ def test_nominal_inputs_saturate_only_in_the_first_half_second(full_paper):
 @pytest.mark.parametrize("name", ["nominal", "disturbed"])
 def test_runs_stay_stable_and_reconverge_after_each_window(full_paper, name):
     """Bounded errors throughout; at the end of each quiet phase (before a window, and the
-    run's end) every error is back below 10 % of the peak it recovers from, or below the
-    floor the disturbed plant's unmodelled rotors and lag leave (a few mm, mrad)."""
+    run's end) every error is back below a bound 2-3x what is measured there (the disturbed
+    plant's unmodelled rotors and lag leave a floor of a few mm, mrad)."""
     run = full_paper.runs[name]
     t = run.t
     assert t[-1] == pytest.approx(15.0)
-    floors = {"ee_position_error": 5e-3, "com_error": 10e-3, "base_attitude_error": 10e-3,
-              "ee_orientation_error": 5e-3}
-    bounds = {"ee_position_error": 0.2, "com_error": 0.5, "base_attitude_error": 0.8,
-              "ee_orientation_error": 0.3}
+    # Largest error over the run (m, rad); measured nominal / disturbed beside each.
+    bounds = {"ee_position_error": 0.2,      # 0.138 / 0.140
+              "com_error": 0.5,              # 0.344 / 0.341
+              "base_attitude_error": 0.8,    # 0.556 / 0.552
+              "ee_orientation_error": 0.3}   # 0.127 / 0.126
+    # The last 0.5 s of each quiet phase, [0, 4), [5, 9), [10, 15] (m, rad). Measured:
+    tails = {"nominal": {
+        "ee_position_error": (1e-3, 7e-5, 1.2e-3),          # 3.45e-4, 2.35e-5, 4.88e-4
+        "com_error": (9e-3, 1.6e-2, 7e-3),                  # 3.78e-3, 6.74e-3, 2.81e-3
+        "base_attitude_error": (7e-3, 1.2e-2, 5e-3),        # 2.73e-3, 4.71e-3, 1.97e-3
+        "ee_orientation_error": (3e-4, 9e-5, 3e-4)},        # 1.19e-4, 3.09e-5, 1.19e-4
+        "disturbed": {
+        "ee_position_error": (3.5e-3, 4.5e-3, 3.5e-3),      # 1.30e-3, 1.77e-3, 1.46e-3
+        "com_error": (5e-3, 2.2e-2, 3.5e-3),                # 2.01e-3, 9.27e-3, 1.30e-3
+        "base_attitude_error": (8e-3, 1.9e-2, 1e-2),        # 3.31e-3, 7.81e-3, 3.89e-3
+        "ee_orientation_error": (1e-3, 1.4e-3, 1.2e-3)}}    # 3.80e-4, 5.54e-4, 4.94e-4
     windows = sorted((d.start, d.stop) for d in run.scenario.disturbances)
     # Quiet phases: [0, first start), [stop_i, start_{i+1}), [last stop, end].
     quiet = [(0.0, windows[0][0])] + [(windows[i][1], windows[i + 1][0])
                                        for i in range(len(windows) - 1)]
     quiet.append((windows[-1][1], float(t[-1])))
-    recovering_from = [0.0] + [w[0] for w in windows]
-    for key in floors:
+    assert len(quiet) == 3
+    for key in bounds:
         e = _diag(run, key)
         assert np.all(np.isfinite(e)) and e.max() < bounds[key], key
-        for (a, b), since in zip(quiet, recovering_from):
-            peak = e[(t >= since) & (t < b)].max()
+        for (a, b), bound in zip(quiet, tails[name][key]):
             tail = e[(t >= b - 0.5) & (t < b)].max()
-            assert tail < max(0.1 * peak, floors[key]), (key, a, b, tail, peak)
+            assert tail < bound, (key, a, b, tail)
 
 
 def test_disturbed_rotors_keep_their_speed(full_paper):
     rotors = full_paper.runs["disturbed"].metrics["rotors"]
     for side in ("left", "right"):
-        assert rotors[side]["speed_max_deviation_rad_s"] < 1.0
-        assert rotors[side]["drive_torque_max_abs_N_m"] < 100.0
+        # measured 0.127 / 0.191 rad/s (left / right) and 6.35 / 9.57 N m
+        assert rotors[side]["speed_max_deviation_rad_s"] < 0.5
+        assert rotors[side]["drive_torque_max_abs_N_m"] < 25.0
 
 
 def test_full_figures_written(full_paper):
     names = {p.name for p in full_paper.figures}
     assert names == {f"{n}.{ext}" for n in plots.FIGURE_NAMES for ext in plots.FORMATS}
-    assert all(p.stat().st_size > 20_000 for p in full_paper.figures)
+    for p in full_paper.figures:
+        if p.suffix == ".png":
+            image = imread(p)[..., :3]
+            assert image.shape[1] > 900 and image.std() > 0.05
+        else:
+            assert p.read_bytes()[:4] == b"%PDF"

@@ -15,10 +15,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from pydrake.common.yaml import yaml_load_data, yaml_load_typed
+from pydrake.common.yaml import yaml_dump, yaml_load_data, yaml_load_typed
 from pydrake.systems.analysis import SimulatorConfig
 
 from aerial_drake.control.law import F_D_LIMIT, SIGMA_MIN_J3_LIMIT, Gains
+from aerial_drake.drake_compat import SimulatorFieldError, translate_simulator_section
 from aerial_drake.robots.models import PLANT_VARIANTS
 from aerial_drake.trajectories.paper import TrajectoryParams
 
@@ -221,10 +222,19 @@ def load_scenario(name_or_path: str | Path, *, overrides: dict | None = None) ->
         path = shipped[str(name_or_path)]
     if not path.is_file():
         raise ScenarioError(f"scenario file not found: {path}")
+    data = None
     try:
-        scenario = yaml_load_typed(schema=Scenario, filename=str(path))
+        text = path.read_text()
+        data = yaml_load_data(text)
+        # A field only some Drake releases have: checked and removed in one place.
+        if isinstance(data, dict) and translate_simulator_section(data.get("simulator"),
+                                                                  "simulator"):
+            text = yaml_dump(data)
+        scenario = yaml_load_typed(schema=Scenario, data=text)
+    except SimulatorFieldError as err:
+        raise ScenarioError(f"{path}: {err}") from None
     except (RuntimeError, ValueError, TypeError) as err:
-        where = _find_bad_field(yaml_load_data(path.read_text()), Scenario)
+        where = _find_bad_field(data, Scenario)
         raise ScenarioError(f"{path}: {where + ': ' if where else ''}{err}") from None
     if overrides:
         scenario = dataclasses.replace(scenario, **overrides)

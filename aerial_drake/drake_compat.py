@@ -1,0 +1,57 @@
+"""Every difference between the Drake releases we support, in one place.
+
+Supported: drake 1.51.1 (the newest wheel for Python 3.10 and 3.11) up to the newest release
+(Python 3.12 and 3.13; 1.58.0 when this was written). Everything else in the package is written
+against the API the releases share; what differs is translated here, with the release that
+changed it, so that a scenario file means the same run on every supported release.
+
+- ``SimulatorConfig.publish_every_time_step``: a field in 1.51.1, gone in 1.58.0 (deprecated by
+  Drake PR #23940 in favour of per-step events that systems declare themselves). Its default,
+  ``false``, is what both releases do without it, and the only value aerial_drake accepts:
+  ``true`` would make every logger record at each integrator step as well as at its period.
+  Shipped files leave the field out; a user's file may keep ``false`` (removed here before
+  Drake sees it) but not ``true`` (an error saying to remove the field).
+"""
+
+from typing import Any
+
+# SimulatorConfig fields that some supported release lacks: name -> (the only accepted
+# value, why, which releases have it).
+_REMOVED_SIMULATOR_FIELDS: dict[str, tuple[Any, str, str]] = {
+    "publish_every_time_step": (
+        False,
+        "aerial_drake's loggers and viewer publish at their own periods; per-step publishing "
+        "would add a log entry at every integrator step",
+        "1.51.1 has it but 1.58.0 does not (deprecated by Drake PR #23940)"),
+}
+
+
+class SimulatorFieldError(ValueError):
+    """A ``simulator:`` field of a scenario that no supported Drake release can honour."""
+
+
+def translate_simulator_section(section: Any, where: str) -> bool:
+    """Remove, in place, the ``simulator:`` fields of a scenario's raw YAML data (a mapping as
+    ``yaml_load_data`` returns it) that only some Drake releases know, after checking that
+    their value is the one every release honours. ``where`` names the section in messages.
+
+    Returns whether anything was removed. Raises :class:`SimulatorFieldError` naming the field,
+    its value and the fix.
+    """
+    if not isinstance(section, dict):
+        return False
+    changed = False
+    for name, (accepted, why, release) in _REMOVED_SIMULATOR_FIELDS.items():
+        if name not in section:
+            continue
+        value = section[name]
+        if value != accepted or not isinstance(value, type(accepted)):
+            shown = str(value).lower() if isinstance(value, bool) else repr(value)
+            raise SimulatorFieldError(
+                f"{where}.{name}: {shown} is not supported ({why}). Remove the field: Drake "
+                f"{release}, and its default, {str(accepted).lower()}, is what every release "
+                "does without it.")
+        del section[name]
+        changed = True
+    return changed
+
