@@ -21,8 +21,8 @@ notes' conventions (design note 1: Drake's v = [w_WB (World), v_WBo (World), q_a
 from __future__ import annotations
 
 import numpy as np
-from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.common.eigen_geometry import Quaternion
+from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.tree import JacobianWrtVariable
 
 E3 = np.eye(3)

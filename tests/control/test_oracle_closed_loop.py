@@ -32,13 +32,21 @@ import pytest
 from pydrake.multibody.tree import JacobianWrtVariable
 
 from aerial_drake.analysis import lyapunov_scenario
-from aerial_drake.control import diagnostics_slices
-from aerial_drake.models import make_plant
-from aerial_drake.reference import (
-    unpack_com_reference, unpack_heading_reference, unpack_task_reference)
-from aerial_drake.runner import run_scenario
+from aerial_drake.control.law import diagnostics_slices
+from aerial_drake.robots.models import make_plant
+from aerial_drake.simulation.runner import run_scenario
+from aerial_drake.trajectories.reference import (
+    unpack_com_reference,
+    unpack_heading_reference,
+    unpack_task_reference,
+)
 from paper_oracles import (
-    ChristoffelFromMassMatrix, central_difference, task_jacobian, task_space_mobility, vee_skew)
+    ChristoffelFromMassMatrix,
+    central_difference,
+    task_jacobian,
+    task_space_mobility,
+    vee_skew,
+)
 
 pytestmark = pytest.mark.slow
 

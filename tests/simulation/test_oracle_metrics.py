@@ -1,5 +1,5 @@
-"""aerial_drake.metrics on synthetic logs with hand-computed answers, and the workspace check
-(aerial_drake.runner.check_workspace) on both sides of its radius (issue 22, item 3).
+"""aerial_drake.simulation.metrics on synthetic logs with hand-computed answers, and the
+workspace check (aerial_drake.simulation.runner.check_workspace) on both sides of its radius (issue 22, item 3).
 
 Every expected number below is computed by hand in the comment beside it, not by the code under
 test. Signals are chosen so that the usual slips give different numbers: an RMS taken as a mean
@@ -14,11 +14,11 @@ import math
 import numpy as np
 import pytest
 
-from aerial_drake import metrics as dut
-from aerial_drake.control import DIAGNOSTICS_SIZE, diagnostics_slices
-from aerial_drake.models import make_plant, nominal_end_effector_offset
-from aerial_drake.runner import check_workspace
-from aerial_drake.scenarios import ScenarioError, load_scenario
+from aerial_drake.control.law import DIAGNOSTICS_SIZE, diagnostics_slices
+from aerial_drake.robots.models import make_plant, nominal_end_effector_offset
+from aerial_drake.simulation import metrics as dut
+from aerial_drake.simulation.runner import check_workspace
+from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
 
 SL = diagnostics_slices()
 DT = 0.1

@@ -9,8 +9,8 @@ Pinocchio's). Pinocchio's free-flyer velocity [v_B; w_B] (base frame) is mapped 
 [w_WB; v_WBo] (World) by v_drake = S v_pin (C picks up -M S_dot S^-1).
 
 Held against it, on every shipped model (the helicopter + KUKA LWR, plant variants "rigid" and
-"rotors"), at random states: both implementations of Section II (aerial_drake.decoupling, numpy;
-aerial_drake.compiled.decompose, numba), then T, Lambda, Gamma of (3)-(6) built here from
+"rotors"), at random states: both implementations of Section II
+(aerial_drake.dynamics.decoupling, numpy; aerial_drake.control.compiled.decompose, numba), then T, Lambda, Gamma of (3)-(6) built here from
 Pinocchio's M, C, J_g by the paper's formulas, and the task Jacobians J1, J2, J3 of (17) and
 Lambda_z, Gamma_z of (19) against the law's (aerial_drake.control via the controller's
 ``solve``).
@@ -29,17 +29,21 @@ pin = pytest.importorskip(
     "pinocchio", reason="Pinocchio (pip package 'pin', in the test extra) is not installed: "
     "the independent rigid-body oracle cannot run")
 
-from aerial_drake import compiled  # noqa: E402
-from aerial_drake.controller import make_controller  # noqa: E402
-from aerial_drake.decoupling import DecoupledDynamics  # noqa: E402
-from aerial_drake.kinematic_tree import KinematicTree  # noqa: E402
-from aerial_drake.models import PLANT_VARIANTS, make_plant  # noqa: E402
-from aerial_drake.reference import evaluate_reference  # noqa: E402
-from aerial_drake.runner import reference_configuration  # noqa: E402
-from aerial_drake.scenarios import load_scenario  # noqa: E402
+from aerial_drake.control import compiled  # noqa: E402
+from aerial_drake.control.controller import make_controller  # noqa: E402
+from aerial_drake.dynamics.decoupling import DecoupledDynamics  # noqa: E402
+from aerial_drake.dynamics.kinematic_tree import KinematicTree  # noqa: E402
+from aerial_drake.robots.models import PLANT_VARIANTS, make_plant  # noqa: E402
+from aerial_drake.simulation.runner import reference_configuration  # noqa: E402
+from aerial_drake.simulation.scenarios import load_scenario  # noqa: E402
+from aerial_drake.trajectories.paper import evaluate_reference  # noqa: E402
 from paper_oracles import (  # noqa: E402
-    ChristoffelFromMassMatrix, PinocchioModel, decoupling_transform, directional_derivative,
-    task_space_mobility)
+    ChristoffelFromMassMatrix,
+    PinocchioModel,
+    decoupling_transform,
+    directional_derivative,
+    task_space_mobility,
+)
 
 
 def rel(a, b):
