@@ -10,10 +10,10 @@ Pinocchio's). Pinocchio's free-flyer velocity [v_B; w_B] (base frame) is mapped 
 
 Held against it, on every shipped model (the helicopter + KUKA LWR, plant variants "rigid" and
 "rotors"), at random states: both implementations of Section II
-(aerial_drake.dynamics.decoupling, numpy; aerial_drake.control.compiled.decompose, numba), then T, Lambda, Gamma of (3)-(6) built here from
-Pinocchio's M, C, J_g by the paper's formulas, and the task Jacobians J1, J2, J3 of (17) and
-Lambda_z, Gamma_z of (19) against the law's (aerial_drake.control via the controller's
-``solve``).
+(aerial_drake.dynamics.decoupling, numpy; aerial_drake.control.compiled.decompose, numba),
+then T, Lambda, Gamma of (3)-(6) built here from Pinocchio's M, C, J_g by the paper's formulas,
+and the task Jacobians J1, J2, J3 of (17) and Lambda_z, Gamma_z of (19) against the law's
+(aerial_drake.control via the controller's ``solve``).
 
 Measured on correct code (relative, worst state): M 1.2e-15, C 1.3e-14, J_g 7e-16, J_g_dot v
 3e-14, end-effector J 9e-16 and J_dot 8e-16; T 8e-15, Lambda 2e-15, Gamma 2.3e-10 (T_dot by a

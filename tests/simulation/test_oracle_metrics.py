@@ -1,5 +1,6 @@
 """aerial_drake.simulation.metrics on synthetic logs with hand-computed answers, and the
-workspace check (aerial_drake.simulation.runner.check_workspace) on both sides of its radius (issue 22, item 3).
+workspace check (aerial_drake.simulation.runner.check_workspace) on both sides of its radius
+(issue 22, item 3).
 
 Every expected number below is computed by hand in the comment beside it, not by the code under
 test. Signals are chosen so that the usual slips give different numbers: an RMS taken as a mean
