@@ -174,6 +174,12 @@ def _find_bad_field(data, schema, prefix: str = "") -> str | None:
 
 def _mismatch(kind, v) -> str | None:
     if kind is float and (isinstance(v, bool) or not isinstance(v, (int, float))):
+        if isinstance(v, str):  # YAML 1.1 reads 1e3 as text; Drake converts it
+            try:
+                float(v)
+                return None
+            except ValueError:
+                pass
         return f"expected a number, got {show(v)}"
     if kind is str and not isinstance(v, str):
         return f"expected text, got {show(v)}"
