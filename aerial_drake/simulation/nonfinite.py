@@ -15,7 +15,7 @@ import numpy as np
 
 #: The logged signals searched for the first non-finite value, in the loop's order (the
 #: references are computed from the time alone and finite by construction).
-_CHECKED_SIGNALS = ("plant_state", "command", "applied_command", "diagnostics",
+CHECKED_SIGNALS = ("plant_state", "command", "applied_command", "diagnostics",
                     "rotor_drive_torque")
 
 
@@ -24,7 +24,7 @@ def first_non_finite_sample(arrays: dict[str, np.ndarray]) -> tuple[int, str] | 
     (the plant state first at equal index), if any. Scans the log once, after the run: no cost
     during the simulation."""
     first: tuple[int, str] | None = None
-    for name in _CHECKED_SIGNALS:
+    for name in CHECKED_SIGNALS:
         if name not in arrays or arrays[name].size == 0:
             continue
         bad = ~np.all(np.isfinite(arrays[name]), axis=1)
@@ -56,3 +56,30 @@ def likely_cause(scenario: Any) -> str:
     return ("likely cause: the closed loop diverged (an unstable or saturated loop, or an "
             "integration step too long for its stiffness: try a smaller "
             "simulator.max_step_size)")
+
+
+def first_non_finite_output(loop: Any, root_context: Any) -> str | None:
+    """The first of the loop's checked signals whose value at ``root_context`` (where a Drake
+    error stopped the run, between two logged samples) is not finite, if any."""
+    for name in CHECKED_SIGNALS:
+        if not loop.has_output_port(name):
+            continue
+        port = loop.output_port(name)
+        try:
+            value = port.Eval(port.get_system().GetMyContextFromRoot(root_context))
+        except Exception:  # the value itself cannot be computed there: that one
+            return name
+        if not np.all(np.isfinite(value)):
+            return name
+    return None
+
+
+#: What a first non-finite signal most often means.
+SIGNAL_MEANING = {
+    "plant_state": "the plant state became non-finite (diverged)",
+    "command": "the control law's command became non-finite",
+    "applied_command": "the command applied to the plant (after lag and saturation) became "
+                       "non-finite",
+    "diagnostics": "the control law's diagnostics became non-finite",
+    "rotor_drive_torque": "the rotor drive's torque became non-finite",
+}

@@ -40,7 +40,12 @@ from aerial_drake.simulation.metrics import (
     phase_edges,
     rotor_metrics,
 )
-from aerial_drake.simulation.nonfinite import first_non_finite_sample, likely_cause
+from aerial_drake.simulation.nonfinite import (
+    SIGNAL_MEANING,
+    first_non_finite_output,
+    first_non_finite_sample,
+    likely_cause,
+)
 from aerial_drake.simulation.outputs import (
     FolderLock,
     prepare_folder,
@@ -296,9 +301,8 @@ def _cut_at_divergence(arrays: dict[str, np.ndarray], index: int, signal_name: s
     wrong, whatever stopped it later, so the log ends there, as the message says."""
     arrays = {k: v[:index + 1] for k, v in arrays.items()}
     t = float(arrays["t"][index])
-    what = ("the plant state became non-finite (diverged)" if signal_name == "plant_state"
-            else f"the logged signal '{signal_name}' became non-finite")
-    return arrays, t, f"t = {t:.4f} s: {what}; {cause}"
+    return arrays, t, (f"t = {t:.4f} s: {SIGNAL_MEANING[signal_name]} (first non-finite "
+                       f"signal: '{signal_name}'); {cause}")
 
 
 def compile_kernels() -> None:
@@ -379,7 +383,11 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
                                                            likely_cause(scenario))
             interrupted = None
         elif failure is not None and "NaN" in failure:  # Drake's check, between samples
-            failure = f"{failure}; {likely_cause(scenario)}"
+            bad = first_non_finite_output(loop, context)
+            what = SIGNAL_MEANING[bad] if bad else "a non-finite value"
+            failure = (f"t = {sim_time:.4f} s: {what} (first non-finite signal: "
+                       f"'{bad or 'unknown'}'); Drake: {failure.split(': ', 1)[-1]}; "
+                       f"{likely_cause(scenario)}")
         metrics = _metrics(scenario, loop, arrays, wall, sim_time)
         result = RunResult(scenario=scenario, log=arrays, metrics=metrics, wall_time_s=wall,
                            completed=failure is None, failure=failure)
