@@ -2,8 +2,8 @@
 changes no number, progress lines, a diverging plant, and the references it logs."""
 
 import io
-import re
 import json
+import re
 
 import numpy as np
 import pytest
