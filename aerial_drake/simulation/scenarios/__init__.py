@@ -210,12 +210,13 @@ def load_scenario(name_or_path: str | Path, *, overrides: dict | None = None) ->
         raise ScenarioError(f"scenario: expected a shipped scenario's name or a path to a "
                             f"YAML file, got {type(name_or_path).__name__} {name_or_path!r}")
     path = Path(name_or_path)
-    if not path.suffix and not path.exists():
+    if not path.suffix:  # a shipped name first; else a path (e.g. a folder given by mistake)
         shipped = shipped_scenarios()
-        if str(name_or_path) not in shipped:
+        if str(name_or_path) in shipped:
+            path = shipped[str(name_or_path)]
+        elif not path.exists():
             raise ScenarioError(f"no scenario named '{name_or_path}'; shipped scenarios: "
                                 f"{', '.join(sorted(shipped))}, or give a path to a .yaml file")
-        path = shipped[str(name_or_path)]
     text, data = read_scenario_file(path)
     try:
         # A field only some Drake releases have: checked and removed in one place.

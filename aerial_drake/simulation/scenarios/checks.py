@@ -144,7 +144,7 @@ DRIVE_GAIN = Range(0.0, 1e5, "N m s/rad", fix="the disturbed scenario uses 50")
 WINDOW = Range(0.0, DAY, "s", fix="a disturbance window lies in [0, 86400] s")
 FORCE = Range(-1e5, 1e5, "N", fix="the paper's disturbances are 40-50 N")
 TORQUE = Range(-1e5, 1e5, "N m", fix="the paper's disturbance torque is 20 N m")
-SIGMA_LIMIT = Range(0.0, 1.0, low_open=True, fix="the default is 1e-3")
+SIGMA_LIMIT = Range(0.0, 1e3, low_open=True, fix="the default is 1e-3")
 F_D_LIMIT = Range(0.0, 1e4, "N", low_open=True, fix="the default is 1 N")
 MAX_LOG_MB = Range(0.0, 1e6, "MB", low_open=True, fix="the default is 1000 MB")
 TRAJECTORY = {
