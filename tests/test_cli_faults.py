@@ -228,3 +228,14 @@ def test_sigterm_from_outside_while_simulating(tmp_path):
     metrics = json.loads((tmp_path / "nominal" / "metrics.json").read_text())
     assert metrics["completed"] is False and 0 < metrics["simulated_time_s"] < 30
     assert all(not isinstance(v, float) or math.isfinite(v) for v in metrics.values())
+
+
+def test_replacing_the_results_of_other_settings_is_said(tmp_path, capsys):
+    """A copied file that keeps ``name: nominal`` replaces nominal's results, with a note."""
+    assert cli.main(["run", "nominal", "--out", str(tmp_path), *SHORT]) == 0
+    assert "note:" not in capsys.readouterr().err
+    assert cli.main(["run", "nominal", "--out", str(tmp_path), *SHORT]) == 0  # same: no note
+    assert "note:" not in capsys.readouterr().err
+    assert cli.main(["run", "nominal", "--out", str(tmp_path), "--quiet", "--duration", "1"]) == 0
+    assert "holds the results of a run with other settings" in capsys.readouterr().err
+    assert result_set(tmp_path / "nominal") == "complete"

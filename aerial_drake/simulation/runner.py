@@ -355,6 +355,8 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
                 stream: TextIO | None, configure: Callable | None,
                 realtime_rate: float | None, zero_controller: bool) -> RunResult:
     stream = stream if stream is not None else sys.stderr
+    if lock is not None:
+        _note_replaced_results(scenario, lock.folder, stream)
     builder, loop, loggers = build_simulation(scenario, zero_controller=zero_controller)
     check_workspace(scenario, loop.controller_model)
     if configure is not None:
@@ -403,6 +405,18 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
     if failure is not None:
         raise SimulationFailed(f"scenario '{scenario.name}' stopped: {failure}")
     return result
+
+
+def _note_replaced_results(scenario: Scenario, folder: Path, stream: TextIO) -> None:
+    """Say so when ``folder`` holds the results of a scenario with other settings (e.g. a
+    copied file that kept ``name: nominal``): they are replaced, not silently."""
+    previous = folder / "scenario.yaml"
+    if not ((folder / "metrics.json").is_file() and previous.is_file()):
+        return
+    if previous.read_text(errors="replace") != yaml_dump_typed(scenario):
+        stream.write(f"note: {folder} holds the results of a run with other settings (its "
+                     "scenario.yaml differs); they are replaced. To keep both, give the "
+                     "scenario another name: or another --out\n")
 
 
 def _metrics(scenario: Scenario, loop: ClosedLoop, log: dict, wall: float,
