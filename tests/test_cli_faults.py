@@ -111,14 +111,19 @@ def test_signal_in_run_paper_does_not_start_the_next_case(tmp_path, capsys, monk
 
 
 # --- The file system ------------------------------------------------------------------------
+def _mount_tmpfs(mount: Path, size: str) -> bool:
+    """Mount a tmpfs of ``size`` on ``mount`` (needs root and mount); whether it worked."""
+    mount.mkdir()
+    return os.geteuid() == 0 and subprocess.run(
+        ["mount", "-t", "tmpfs", "-o", f"size={size}", "tmpfs", str(mount)],
+        capture_output=True).returncode == 0
+
+
 @pytest.fixture
 def small_tmpfs(tmp_path):
-    """A 256 kB tmpfs (needs root and mount); None where it cannot be mounted."""
+    """A 4 MB tmpfs; None where it cannot be mounted."""
     mount = tmp_path / "mnt"
-    mount.mkdir()
-    if os.geteuid() != 0 or subprocess.run(
-            ["mount", "-t", "tmpfs", "-o", "size=256k", "tmpfs", str(mount)],
-            capture_output=True).returncode != 0:
+    if not _mount_tmpfs(mount, "4m"):
         yield None
         return
     try:
@@ -127,11 +132,38 @@ def small_tmpfs(tmp_path):
         subprocess.run(["umount", "-l", str(mount)], capture_output=True)
 
 
+def _fill(folder: Path) -> None:
+    """Fill the file system holding ``folder`` (another process filling the disk)."""
+    with open(folder / "filler", "wb") as f:
+        try:
+            while True:
+                f.write(b"\0" * 65536)
+                f.flush()
+        except OSError:
+            pass
+
+
+def test_a_disk_too_small_is_refused_before_simulating(tmp_path, capsys, monkeypatch):
+    mount = tmp_path / "tiny"
+    if not _mount_tmpfs(mount, "256k"):
+        pytest.skip("needs root and mount for a 256 kB tmpfs")  # (the injected test covers it)
+    try:
+        monkeypatch.setattr(runner, "build_simulation", lambda *a, **k: pytest.fail("built"))
+        status = cli.main(["run", "nominal", "--out", str(mount), *SHORT])
+        err = capsys.readouterr().err
+        assert status == 2 and "MB free; the run's files need up to" in err, err
+        assert result_set(mount / "nominal") == "nothing"
+    finally:
+        subprocess.run(["umount", "-l", str(mount)], capture_output=True)
+
+
 def test_full_disk_leaves_no_result_set_and_says_so(tmp_path, small_tmpfs, capsys, monkeypatch):
-    """A full disk while writing: exit 3, and neither the new files nor an earlier run's
-    metrics.json (which would say completed: true of a set it no longer describes) remain."""
+    """The disk fills up during the simulation (a 4 MB tmpfs filled at the first progress
+    pause; without root, an injected ENOSPC): exit 3, and neither the new files nor an
+    earlier run's metrics.json (which would say completed: true of a set it no longer
+    describes) remain."""
     out = small_tmpfs if small_tmpfs is not None else tmp_path
-    if small_tmpfs is None:  # no tmpfs: inject the failure
+    if small_tmpfs is None:
         write = outputs.write_atomically
 
         def full(path, fn):
@@ -139,6 +171,8 @@ def test_full_disk_leaves_no_result_set_and_says_so(tmp_path, small_tmpfs, capsy
                 raise OSError(28, "No space left on device")
             write(path, fn)
         monkeypatch.setattr(outputs, "write_atomically", full)
+    else:
+        monkeypatch.setattr(runner._Progress, "report", lambda self, t: _fill(out))
     folder = out / "nominal"
     folder.mkdir()
     (folder / "metrics.json").write_text('{"completed": true}')  # an earlier run's

@@ -20,6 +20,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import shutil
 import tempfile
 from pathlib import Path
 from typing import IO, Any, Callable
@@ -125,9 +126,10 @@ class FolderLock:
             self._file = None
 
 
-def prepare_folder(folder: str | os.PathLike) -> FolderLock:
-    """Create ``folder`` if needed, check it can be written, and lock it; raises OutputError
-    (before anything is simulated) naming the folder and the fix."""
+def prepare_folder(folder: str | os.PathLike, need_mb: float = 0.0) -> FolderLock:
+    """Create ``folder`` if needed, check it can be written and has ``need_mb`` MB free (the
+    run's estimated files), and lock it; raises OutputError (before anything is simulated)
+    naming the folder and the fix."""
     if isinstance(folder, bool) or not isinstance(folder, (str, os.PathLike)):
         raise OutputError(f"out_dir: expected a folder path, got {type(folder).__name__} "
                           f"{folder!r}")
@@ -144,6 +146,11 @@ def prepare_folder(folder: str | os.PathLike) -> FolderLock:
     if not os.access(path, os.W_OK | os.X_OK):
         raise OutputError(f"output folder {path} is not writable (permission denied): "
                           "choose another --out")
+    free_mb = shutil.disk_usage(path).free / 1e6
+    if free_mb < need_mb:
+        raise OutputError(f"output folder {path} has {free_mb:.1f} MB free; the run's files "
+                          f"need up to {need_mb:.1f} MB (estimated from duration / "
+                          "log_period): free some space or choose another --out")
     lock = FolderLock(path)
     lock.acquire()
     return lock

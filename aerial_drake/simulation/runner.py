@@ -53,6 +53,7 @@ from aerial_drake.simulation.outputs import (
     write_result_set,
 )
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
+from aerial_drake.simulation.scenarios.checks import estimated_log_mb
 from aerial_drake.trajectories.paper import compile_reference, evaluate_reference, sample_reference
 
 
@@ -341,7 +342,8 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
             isinstance(realtime_rate, (int, float)) and 0 <= realtime_rate <= 1000):
         raise ScenarioError(f"realtime_rate must be a number >= 0 and <= 1000; got "
                             f"{realtime_rate!r}", "realtime_rate")
-    lock = prepare_folder(out_dir) if out_dir is not None else None
+    need_mb = estimated_log_mb(scenario.duration, scenario.log_period)
+    lock = prepare_folder(out_dir, need_mb) if out_dir is not None else None
     try:
         with handling():
             return _run_locked(scenario, lock, progress, stream, configure, realtime_rate,
