@@ -91,7 +91,7 @@ KINDS = ["type", "bool", "none", "empty", "wrong_length", "sign", "nan", "inf", 
          "tiny", "number"]
 
 
-@settings(max_examples=400, deadline=None, derandomize=True,
+@settings(max_examples=400, deadline=None, derandomize=True, database=None,
           suppress_health_check=[HealthCheck.too_slow])
 @given(st.sampled_from(PATHS), st.sampled_from(KINDS),
        st.floats(allow_nan=True, allow_infinity=True))
