@@ -6,12 +6,13 @@
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
 from pathlib import Path
 
 import numpy as np
+
+from aerial_drake.studies.reporting import report_error
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
@@ -93,34 +94,67 @@ def _compile_first(args: argparse.Namespace) -> None:
     os.execv(sys.executable, [sys.executable, *sys.orig_argv[1:]])
 
 
+def check_options(args: argparse.Namespace) -> dict:
+    """The run options as scenario overrides, after the checks argparse cannot make; raises
+    ScenarioError naming the option."""
+    from aerial_drake.simulation.scenarios import ScenarioError
+
+    overrides: dict = {}
+    if args.duration is not None:
+        overrides["duration"] = args.duration
+    if args.max_log_mb is not None:
+        overrides["max_log_mb"] = args.max_log_mb
+    if args.realtime_rate is not None and not 0 <= args.realtime_rate <= 1000:
+        raise ScenarioError(f"--realtime-rate must be >= 0 and <= 1000 (1 = real time); got "
+                            f"{args.realtime_rate}", "--realtime-rate")
+    if args.meshcat_port is not None and not 0 <= args.meshcat_port <= 65535:
+        raise ScenarioError(f"--meshcat-port must be a port number, 0 to 65535; got "
+                            f"{args.meshcat_port}", "--meshcat-port")
+    if args.seed is not None and args.seed < 0:
+        raise ScenarioError(f"--seed must be >= 0; got {args.seed}", "--seed")
+    if not str(args.out).strip():
+        raise ScenarioError("--out must name a folder; got ''", "--out")
+    return overrides
+
+
+def _option_note(err, overrides: dict) -> str:
+    """Which command-line option set the field an error names, if one did."""
+    field = getattr(err, "field", None)
+    if isinstance(field, str) and field in overrides:
+        return f" (set by --{field.replace('_', '-')})"
+    return ""
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from aerial_drake.dynamics.equilibrium import UnreachablePose
+    from aerial_drake.simulation.interrupts import Interrupted
+    from aerial_drake.simulation.outputs import OutputError, ResultsNotWritten
     from aerial_drake.simulation.runner import SimulationFailed, SimulationInterrupted, run_scenario
     from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
 
+    try:
+        overrides = check_options(args)
+    except ScenarioError as err:
+        return report_error(args, 2, err)
     # Both of Section IV's runs and Figs. 3-6 (aerial_drake.studies.paper).
     if args.scenario == "paper":
         if args.meshcat or args.record or args.realtime_rate is not None:
-            print("error: --meshcat, --record and --realtime-rate watch one scenario; use "
-                  "'aerial-drake run nominal --meshcat' or 'run disturbed --meshcat'",
-                  file=sys.stderr)
-            return 2
+            return report_error(args, 2, "--meshcat, --record and --realtime-rate watch one "
+                                "scenario; use 'aerial-drake run nominal --meshcat' or 'run "
+                                "disturbed --meshcat'")
         _compile_first(args)  # before importing matplotlib (the peak is the compile's)
         from aerial_drake.studies.paper import cli_run
-        return cli_run(args)
-    overrides = {}
-    if args.duration is not None:
-        overrides["duration"] = args.duration
+        return cli_run(args, overrides)
     try:
         scenario = load_scenario(args.scenario, overrides=overrides)
         if args.seed is not None:
             from aerial_drake.studies.paper import perturb_initial
             scenario = perturb_initial(scenario, args.seed)
     except ScenarioError as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        return report_error(args, 2, ScenarioError(f"{err}{_option_note(err, overrides)}",
+                                                   err.field))
     _compile_first(args)  # after the scenario's checks, before Meshcat starts
-    out = Path(args.out) / scenario.name
+    out = Path(args.out) / scenario.folder_name
     view = None
     if args.meshcat or args.record:  # aerial_drake.viz.meshcat_view
         from aerial_drake.viz.meshcat_view import MeshcatPortInUse, MeshcatView
@@ -130,31 +164,38 @@ def _cmd_run(args: argparse.Namespace) -> int:
                 port = 0  # recording only: leave 7000-7099 to live views
             view = MeshcatView(scenario, live=args.meshcat, host=args.meshcat_host, port=port)
         except (MeshcatPortInUse, ValueError) as err:
-            print(f"error: {err}", file=sys.stderr)
-            return 2
+            return report_error(args, 2, err)
         if args.meshcat:
             print(f"Meshcat: open {view.url} in a browser")
     realtime = args.realtime_rate
     if realtime is None and args.meshcat:
         realtime = 1.0
-    print(f"running scenario '{scenario.name}' ({scenario.duration:g} s) -> {out}")
+    print(f"running scenario '{scenario.name}' ({scenario.duration:g} s) -> {out}", flush=True)
     try:
         result = run_scenario(scenario, out_dir=out, progress=not args.quiet,
                               configure=view.configure if view else None,
                               realtime_rate=realtime)
     except (ScenarioError, UnreachablePose) as err:  # found before the simulation starts
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        return report_error(args, 2, err)
+    except ResultsNotWritten as err:
+        return report_error(args, 3, err)
+    except OutputError as err:  # the folder, checked before the simulation starts
+        return report_error(args, 2, err)
+    except SimulationInterrupted as err:
+        return report_error(args, err.exit_status, err,
+                            f"logs up to the interruption are in {out}")
     except SimulationFailed as err:
-        print(f"error: {err}", file=sys.stderr)
-        print(f"logs up to the failure are in {out}", file=sys.stderr)
-        return 130 if isinstance(err, SimulationInterrupted) else 1
+        return report_error(args, 1, err, f"logs up to the failure are in {out}")
+    except Interrupted as err:  # before the simulation started (building the model)
+        return report_error(args, err.exit_status, f"interrupted ({err}) before the "
+                            "simulation; nothing written")
     finally:
         if view is not None:
             print(f"wrote {view.finish(out)}", file=sys.stderr)
     _print_summary(result)
     if args.json:
-        print(json.dumps(result.metrics, indent=2))
+        from aerial_drake.simulation.outputs import strict_json
+        print(strict_json(result.metrics))
     return 0
 
 
@@ -164,17 +205,25 @@ def _cmd_analyze(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("--debug", action="store_true",
+                        help="print the traceback of an unexpected error")
     parser = argparse.ArgumentParser(
-        prog="aerial-drake",
+        prog="aerial-drake", parents=[common],
         description="Task-space tracking control for underactuated aerial manipulators, on Drake.")
     sub = parser.add_subparsers(dest="command", required=True)
-    run = sub.add_parser("run", help="simulate a scenario and write log.npz and metrics.json")
+    run = sub.add_parser("run", parents=[common],
+                         help="simulate a scenario and write log.npz and metrics.json")
     run.add_argument("scenario", help="shipped scenario name (e.g. nominal), a YAML file, or "
                      "'paper' (nominal and disturbed, and the paper's figures, in OUT/paper)")
     run.add_argument("--duration", type=float, default=None, help="override the duration (s)")
     run.add_argument("--out", default="out", help="output folder (default: ./out)")
     run.add_argument("--quiet", action="store_true", help="no progress line")
-    run.add_argument("--json", action="store_true", help="also print metrics.json")
+    run.add_argument("--json", action="store_true",
+                     help="also print metrics.json (on failure: a JSON error object)")
+    run.add_argument("--max-log-mb", type=float, default=None,
+                     help="refuse a run whose estimated log exceeds this (MB; default: the "
+                          "scenario's max_log_mb, 1000)")
     run.add_argument("--meshcat", action="store_true",
                      help="watch it live in a browser (prints the URL) and write replay.html")
     run.add_argument("--record", action="store_true",
@@ -192,11 +241,13 @@ def build_parser() -> argparse.ArgumentParser:
                           "numpy.random.default_rng(SEED) (bounds: aerial_drake.studies.paper."
                           "SEED_BOUNDS); without it runs are deterministic")
     run.set_defaults(func=_cmd_run)
-    info = sub.add_parser("info", help="print a summary of the models and scenarios")
+    info = sub.add_parser("info", parents=[common],
+                          help="print a summary of the models and scenarios")
     info.set_defaults(func=_cmd_info)
     analyze = sub.add_parser(
-        "analyze", help="equilibria, linearisation, eigenvalues, controllability, Lyapunov "
-        "function and region of attraction; writes analysis.json and plots (docs/analysis.md)")
+        "analyze", parents=[common], help="equilibria, linearisation, eigenvalues, "
+        "controllability, Lyapunov function and region of attraction; writes analysis.json "
+        "and plots (docs/analysis.md)")
     analyze.add_argument("--out", default="out/analysis", help="output folder")
     analyze.add_argument("--scenario", default="nominal", help="scenario whose gains and "
                          "trajectory are analysed (default: nominal)")
@@ -208,17 +259,25 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    from aerial_drake.simulation.interrupts import exit_status_of, handling
+
     args = build_parser().parse_args(argv)
     # Run as a program (its arguments from the command line): _compile_first may restart it.
     args.restartable = argv is None
     try:
-        return args.func(args)
-    except KeyboardInterrupt:
-        # A Ctrl-C in the simulation is handled by the runner (logs written, exit 130); this is
-        # one before it started (loading, compiling, solving the initial pose) or after it.
-        print("interrupted (Ctrl-C) outside the simulation; nothing more written",
-              file=sys.stderr)
-        return 130
+        with handling():  # SIGINT, SIGTERM, SIGHUP: aerial_drake.simulation.interrupts
+            return args.func(args)
+    except KeyboardInterrupt as err:
+        # One in the simulation is handled by the runner (logs written, exit 128 + signal);
+        # this is one before it started (loading, compiling, solving the initial pose).
+        print(f"interrupted ({str(err) or 'Ctrl-C'}) outside the simulation; nothing more "
+              "written", file=sys.stderr)
+        return exit_status_of(err)
+    except Exception as err:  # a bug, or a fault not foreseen: one line unless --debug
+        if args.debug:
+            raise
+        return report_error(args, 1, f"unexpected {type(err).__name__}: {err} (rerun with "
+                            "--debug for the traceback, and please report it)")
 
 
 if __name__ == "__main__":

@@ -181,6 +181,10 @@ def unit_vector_derivatives(a: np.ndarray, a_dot: np.ndarray, a_ddot: np.ndarray
     return b, b_dot, b_ddot
 
 
+#: Smallest |b3 x b1d| for which :func:`desired_attitude` defines R_d (13).
+HEADING_LIMIT = 1e-9
+
+
 def desired_attitude(f_d: np.ndarray, f_d_dot: np.ndarray, f_d_ddot: np.ndarray,
                      b1d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, Any]:
     """R_d of (12)-(13) and its first two time derivatives, from f_d and the heading b1d, and
@@ -191,6 +195,14 @@ def desired_attitude(f_d: np.ndarray, f_d_dot: np.ndarray, f_d_ddot: np.ndarray,
     x = cross_rows(np.column_stack([b3, b3_dot, b3, b3_ddot, b3_dot, b3]),
                     np.column_stack([b1, b1, b1_dot, b1, b1_dot, b1_ddot]))
     c, c_dot, c_ddot = x[:, 0], x[:, 1] + x[:, 2], x[:, 3] + 2.0 * x[:, 4] + x[:, 5]
+    norm_c = _norm(c)
+    norm_value = float(norm_c.value() if hasattr(norm_c, "value") else norm_c)
+    if not norm_value > HEADING_LIMIT:  # (13) undefined: b2 = c / |c|
+        raise AssumptionViolation(
+            f"the heading b1d is parallel to the desired thrust direction b3 (|b3 x b1d| = "
+            f"{norm_value:.3g}, limit {HEADING_LIMIT:g}): R_d of (13) is "
+            "undefined; the desired force must not point along the heading (a horizontal "
+            "b1d and a thrust that is not horizontal)")
     b2, b2_dot, b2_ddot = unit_vector_derivatives(c, c_dot, c_ddot)
     # (13): R_d = [b2 x b3, b2, b3], and its derivatives.
     y = cross_rows(np.column_stack([b2, b2_dot, b2, b2_ddot, b2_dot, b2]),
@@ -198,7 +210,7 @@ def desired_attitude(f_d: np.ndarray, f_d_dot: np.ndarray, f_d_ddot: np.ndarray,
     R_d = np.column_stack([y[:, 0], b2, b3])
     R_d_dot = np.column_stack([y[:, 1] + y[:, 2], b2_dot, b3_dot])
     R_d_ddot = np.column_stack([y[:, 3] + 2.0 * y[:, 4] + y[:, 5], b2_ddot, b3_ddot])
-    return R_d, R_d_dot, R_d_ddot, _norm(c)
+    return R_d, R_d_dot, R_d_ddot, norm_c
 
 
 def desired_force(m: float, gravity: float, com_reference: np.ndarray, x_t: np.ndarray,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import signal
 import sys
 import time
 from dataclasses import dataclass
@@ -31,6 +32,7 @@ from aerial_drake.robots.models import (
     nominal_end_effector_offset,
 )
 from aerial_drake.simulation.diagram import ClosedLoop, build_simulation, input_limits
+from aerial_drake.simulation.interrupts import deferred, handling, signal_name
 from aerial_drake.simulation.metrics import (
     compute_metrics,
     disturbance_response,
@@ -38,7 +40,20 @@ from aerial_drake.simulation.metrics import (
     phase_edges,
     rotor_metrics,
 )
+from aerial_drake.simulation.nonfinite import (
+    SIGNAL_MEANING,
+    first_non_finite_output,
+    first_non_finite_sample,
+    likely_cause,
+)
+from aerial_drake.simulation.outputs import (
+    FolderLock,
+    prepare_folder,
+    strict_json,
+    write_result_set,
+)
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
+from aerial_drake.simulation.scenarios.checks import estimated_log_mb
 from aerial_drake.trajectories.paper import compile_reference, evaluate_reference, sample_reference
 
 
@@ -47,7 +62,16 @@ class SimulationFailed(RuntimeError):
 
 
 class SimulationInterrupted(SimulationFailed):
-    """The user stopped the run (Ctrl-C); what was logged is written all the same."""
+    """A signal stopped the run (SIGINT/Ctrl-C, SIGTERM, SIGHUP); what was logged is written
+    all the same. ``signum`` is the signal's number (the command line exits 128 + it)."""
+
+    def __init__(self, message: str, signum: int = signal.SIGINT) -> None:
+        super().__init__(message)
+        self.signum = signum
+
+    @property
+    def exit_status(self) -> int:
+        return 128 + self.signum
 
 
 @dataclass
@@ -205,20 +229,24 @@ def _advance(simulator: Simulator, plant: MultibodyPlant, pauses: list[float],
 
 
 def _simulate(simulator: Simulator, loop: ClosedLoop, pauses: list[float],
-              progress: _Progress) -> tuple[str | None, bool, float]:
-    """Run the simulation; returns the failure message (None if it reached the end), whether
-    Ctrl-C stopped it, and the wall time (s)."""
-    failure, interrupted = None, False
+              progress: _Progress) -> tuple[str | None, int | None, float]:
+    """Run the simulation; returns the failure message (None if it reached the end), the
+    number of the signal that stopped it (None if none did), and the wall time (s)."""
+    failure, interrupted = None, None
     start = time.perf_counter()
     try:
         _prime_held_inputs(loop, simulator.get_mutable_context())
         simulator.Initialize()
         _advance(simulator, loop.simulated_plant.plant, pauses, progress)
-    except (AssumptionViolation, FloatingPointError, RuntimeError) as err:
+    except (AssumptionViolation, FloatingPointError) as err:
         failure = str(err)
-    except KeyboardInterrupt:
+    except RuntimeError as err:  # Drake's own (e.g. a NaN force): add the time
         time_now = simulator.get_context().get_time()
-        failure, interrupted = f"interrupted (Ctrl-C) at t = {time_now:.3f} s", True
+        failure = f"t = {time_now:.4f} s: {err}"
+    except KeyboardInterrupt as err:  # (Interrupted: SIGINT, SIGTERM, SIGHUP)
+        time_now = simulator.get_context().get_time()
+        interrupted = getattr(err, "signum", signal.SIGINT)
+        failure = f"interrupted ({signal_name(interrupted)}) at t = {time_now:.3f} s"
     return failure, interrupted, time.perf_counter() - start
 
 
@@ -267,20 +295,15 @@ def _align_held_diagnostics(arrays: dict[str, np.ndarray], loop: ClosedLoop,
     return arrays
 
 
-def _first_non_finite_sample(arrays: dict[str, np.ndarray]) -> int | None:
-    """Index of the first logged plant state that is not finite, if any."""
-    bad = ~np.all(np.isfinite(arrays["plant_state"]), axis=1)
-    return int(np.argmax(bad)) if bad.any() else None
-
-
-def _cut_at_divergence(arrays: dict[str, np.ndarray], index: int,
-                       ) -> tuple[dict[str, np.ndarray], float, str]:
-    """The log up to its first non-finite plant state (at ``index``), that sample's time and
-    the failure message. The first non-finite sample is where the run went wrong, whatever
-    stopped it later, so the log ends there, as the message says."""
+def _cut_at_divergence(arrays: dict[str, np.ndarray], index: int, signal_name: str,
+                       cause: str) -> tuple[dict[str, np.ndarray], float, str]:
+    """The log up to its first non-finite sample (at ``index``, in ``signal_name``), that
+    sample's time and the failure message. The first non-finite sample is where the run went
+    wrong, whatever stopped it later, so the log ends there, as the message says."""
     arrays = {k: v[:index + 1] for k, v in arrays.items()}
     t = float(arrays["t"][index])
-    return arrays, t, f"t = {t:.4f} s: the plant state became non-finite (diverged)"
+    return arrays, t, (f"t = {t:.4f} s: {SIGNAL_MEANING[signal_name]} (first non-finite "
+                       f"signal: '{signal_name}'); {cause}")
 
 
 def compile_kernels() -> None:
@@ -297,23 +320,51 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
                  configure: Callable | None = None,
                  realtime_rate: float | None = None,
                  zero_controller: bool = False) -> RunResult:
-    """Simulate ``scenario``; write ``log.npz`` and ``metrics.json`` to ``out_dir`` if given.
+    """Simulate ``scenario``; write ``log.npz``, ``scenario.yaml`` and ``metrics.json`` (last)
+    to the folder ``out_dir`` if given (docs/reliability.md).
 
-    A failure (an assumption of the paper violated, a diverging state) stops the run with
-    :class:`SimulationFailed` naming the time and the reason; the logs up to that instant are
-    still written to ``out_dir`` first. ``configure(builder, loop)`` may add systems (e.g. a
-    visualiser) before the diagram is built. ``realtime_rate`` overrides the scenario's
-    target real-time rate (e.g. 1.0 to watch it). Ctrl-C stops the run the same way, with
-    :class:`SimulationInterrupted`.
+    The scenario is validated and ``out_dir`` checked and locked before any model is built
+    (ScenarioError, OutputError). A failure (an assumption of the paper violated, a
+    non-finite value) stops the run with :class:`SimulationFailed` naming the time and the
+    reason; the logs up to that instant are still written first. ``configure(builder,
+    loop)`` may add systems (e.g. a visualiser) before the diagram is built.
+    ``realtime_rate`` overrides the scenario's target real-time rate (e.g. 1.0 to watch it).
+    SIGINT (Ctrl-C), SIGTERM and SIGHUP stop the run the same way, with
+    :class:`SimulationInterrupted`; one arriving while the files are written is held until
+    they are complete.
     """
+    if not isinstance(scenario, Scenario):
+        raise ScenarioError(f"scenario: expected a Scenario, got {type(scenario).__name__} "
+                            f"{scenario!r}; load one with aerial_drake.simulation.scenarios."
+                            "load_scenario(name_or_path)", "scenario")
     scenario.validate()
+    if realtime_rate is not None and not (
+            isinstance(realtime_rate, (int, float)) and 0 <= realtime_rate <= 1000):
+        raise ScenarioError(f"realtime_rate must be a number >= 0 and <= 1000; got "
+                            f"{realtime_rate!r}", "realtime_rate")
+    need_mb = estimated_log_mb(scenario.duration, scenario.log_period)
+    lock = prepare_folder(out_dir, need_mb) if out_dir is not None else None
+    try:
+        with handling():
+            return _run_locked(scenario, lock, progress, stream, configure, realtime_rate,
+                               zero_controller)
+    finally:
+        if lock is not None:
+            lock.release()
+
+
+def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
+                stream: TextIO | None, configure: Callable | None,
+                realtime_rate: float | None, zero_controller: bool) -> RunResult:
     stream = stream if stream is not None else sys.stderr
+    if lock is not None:
+        _note_replaced_results(scenario, lock.folder, stream)
     builder, loop, loggers = build_simulation(scenario, zero_controller=zero_controller)
     check_workspace(scenario, loop.controller_model)
     if configure is not None:
         configure(builder, loop)
     diagram = builder.Build()
-    diagram.set_name(f"scenario_{scenario.name}")
+    diagram.set_name(f"scenario_{scenario.folder_name}")
     simulator = Simulator(diagram)
     ApplySimulatorConfig(scenario.simulator, simulator)
     if realtime_rate is not None:
@@ -324,23 +375,50 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     progress_lines = _Progress(scenario.duration, stream if progress else None)
     failure, interrupted, wall = _simulate(
         simulator, loop, pause_times(scenario.duration, scenario.log_period), progress_lines)
-    if progress and _is_terminal(stream):
-        stream.write("\n")  # end the self-rewriting progress line
-    arrays = _collect_log(scenario, loop, loggers, context)
-    sim_time = float(context.get_time())
-    diverged = _first_non_finite_sample(arrays)
-    if diverged is not None:
-        arrays, sim_time, failure = _cut_at_divergence(arrays, diverged)
-        interrupted = False
-    metrics = _metrics(scenario, loop, arrays, wall, sim_time)
-    result = RunResult(scenario=scenario, log=arrays, metrics=metrics, wall_time_s=wall,
-                       completed=failure is None, failure=failure)
-    if out_dir is not None:
-        result.out_dir = write_outputs(result, out_dir)
+    # From here on a signal is held until the files are written (interrupts.deferred).
+    with deferred() as held:
+        if progress and _is_terminal(stream):
+            stream.write("\n")  # end the self-rewriting progress line
+        arrays = _collect_log(scenario, loop, loggers, context)
+        sim_time = float(context.get_time())
+        diverged = first_non_finite_sample(arrays)
+        if diverged is not None:
+            arrays, sim_time, failure = _cut_at_divergence(arrays, *diverged,
+                                                           likely_cause(scenario))
+            interrupted = None
+        elif failure is not None and "NaN" in failure:  # Drake's check, between samples
+            bad = first_non_finite_output(loop, context)
+            what = SIGNAL_MEANING[bad] if bad else "a non-finite value"
+            failure = (f"t = {sim_time:.4f} s: {what} (first non-finite signal: "
+                       f"'{bad or 'unknown'}'); Drake: {failure.split(': ', 1)[-1]}; "
+                       f"{likely_cause(scenario)}")
+        metrics = _metrics(scenario, loop, arrays, wall, sim_time)
+        result = RunResult(scenario=scenario, log=arrays, metrics=metrics, wall_time_s=wall,
+                           completed=failure is None, failure=failure)
+        if lock is not None:
+            result.out_dir = write_outputs(result, lock.folder)
+    if interrupted is None and held:  # a signal while writing: the files are complete
+        interrupted = held[0]
+        failure = failure or (f"interrupted ({signal_name(interrupted)}) while writing the "
+                              "results; they are complete")
+    if interrupted is not None:
+        raise SimulationInterrupted(f"scenario '{scenario.name}' stopped: {failure}",
+                                    interrupted)
     if failure is not None:
-        error = SimulationInterrupted if interrupted else SimulationFailed
-        raise error(f"scenario '{scenario.name}' stopped: {failure}")
+        raise SimulationFailed(f"scenario '{scenario.name}' stopped: {failure}")
     return result
+
+
+def _note_replaced_results(scenario: Scenario, folder: Path, stream: TextIO) -> None:
+    """Say so when ``folder`` holds the results of a scenario with other settings (e.g. a
+    copied file that kept ``name: nominal``): they are replaced, not silently."""
+    previous = folder / "scenario.yaml"
+    if not ((folder / "metrics.json").is_file() and previous.is_file()):
+        return
+    if previous.read_text(errors="replace") != yaml_dump_typed(scenario):
+        stream.write(f"note: {folder} holds the results of a run with other settings (its "
+                     "scenario.yaml differs); they are replaced. To keep both, give the "
+                     "scenario another name: or another --out\n")
 
 
 def _metrics(scenario: Scenario, loop: ClosedLoop, log: dict, wall: float,
@@ -371,15 +449,21 @@ def _metrics(scenario: Scenario, loop: ClosedLoop, log: dict, wall: float,
 
 
 def write_outputs(result: RunResult, out_dir: str | Path) -> Path:
+    """Write the run's files into ``out_dir`` (aerial_drake.simulation.outputs): each to a
+    temporary name then renamed, ``metrics.json`` last (a folder with ``metrics.json`` holds
+    one run's complete set); a write that fails leaves none of them (OutputError)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     names = json.dumps({"diagnostics": [list(x) for x in DIAGNOSTICS_LAYOUT]})
     arrays: dict[str, Any] = dict(result.log)  # (typed Any: numpy's stub has a bool keyword)
-    np.savez_compressed(out / "log.npz", layout=np.array(names), **arrays)
     metrics = dict(result.metrics)
     metrics["completed"] = result.completed
     metrics["failure"] = result.failure
-    (out / "metrics.json").write_text(json.dumps(metrics, indent=2))
-    # The scenario as run (after overrides), so a run folder describes itself (plots read it).
-    (out / "scenario.yaml").write_text(yaml_dump_typed(result.scenario))
+    metrics_text = strict_json(metrics)
+    scenario_text = yaml_dump_typed(result.scenario)
+    write_result_set(out, [
+        ("log.npz", lambda f: np.savez_compressed(f, layout=np.array(names), **arrays)),
+        # The scenario as run (after overrides), so a run folder describes itself.
+        ("scenario.yaml", lambda f: f.write(scenario_text.encode("utf-8"))),
+    ], ("metrics.json", lambda f: f.write(metrics_text.encode("utf-8"))))
     return out

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -30,8 +29,15 @@ import numpy as np
 
 from aerial_drake.dynamics.equilibrium import UnreachablePose
 from aerial_drake.simulation.metrics import saturated_after_key
-from aerial_drake.simulation.runner import SimulationFailed, run_scenario
+from aerial_drake.simulation.outputs import (
+    OutputError,
+    ResultsNotWritten,
+    strict_json,
+    write_text_atomically,
+)
+from aerial_drake.simulation.runner import SimulationFailed, SimulationInterrupted, run_scenario
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError, load_scenario
+from aerial_drake.studies.reporting import report_error
 from aerial_drake.viz.plots import Run, load_run, write_figures
 
 PAPER_SCENARIOS = ("nominal", "disturbed")
@@ -69,6 +75,8 @@ class PaperResult:
     failures: dict[str, str] = field(default_factory=dict)  # scenario name -> reason
     figures: list[Path] = field(default_factory=list)
     table: str = ""
+    # The signal that stopped the study (its remaining runs were not started), if one did.
+    interrupted: int | None = None
 
     @property
     def completed(self) -> bool:
@@ -77,36 +85,53 @@ class PaperResult:
 
 def run_paper(out_dir: str | Path = "out/paper", duration: float | None = None, *,
               seed: int | None = None, progress: bool = True,
-              stream: TextIO | None = None) -> PaperResult:
+              stream: TextIO | None = None, overrides: dict | None = None) -> PaperResult:
     """Run the nominal and disturbed scenarios into ``out_dir/<name>/``, write Figs. 3-6 and
     ``summary.txt`` into ``out_dir``, and return the result (the table is printed by the
     command line, not here).
 
     ``duration`` overrides both scenarios' duration (s); ``seed`` perturbs their initial
-    offsets (module docstring). A run that fails (an assumption violated, divergence) still
-    leaves its logs up to the failure; the figures are drawn from whatever was logged.
+    offsets (module docstring); ``overrides`` replaces more top-level fields of both. Both
+    scenarios are loaded and checked before either runs. A run that fails (an assumption
+    violated, divergence) still leaves its logs up to the failure; the figures are drawn from
+    whatever was logged. A signal (SIGINT, SIGTERM, SIGHUP) stops the study: the run it
+    stopped writes its logs, the remaining run is not started, no figure is drawn, and
+    :attr:`PaperResult.interrupted` holds the signal's number.
     """
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     result = PaperResult(out_dir=out)
     rng = np.random.default_rng(seed) if seed is not None else None
-    overrides = {"duration": duration} if duration is not None else None
-    for name in PAPER_SCENARIOS:
-        scenario = load_scenario(name, overrides=overrides)
+    overrides = dict(overrides or {})
+    if duration is not None:
+        overrides["duration"] = duration
+    scenarios = {}
+    for name in PAPER_SCENARIOS:  # every check before the first run
+        scenarios[name] = load_scenario(name, overrides=overrides or None)
         if seed is not None:  # (and so rng)
-            scenario = perturb_initial(scenario, seed, rng)
+            scenarios[name] = perturb_initial(scenarios[name], seed, rng)
+    for name, scenario in scenarios.items():
         if progress and stream is not None:
             stream.write(f"running '{name}' ({scenario.duration:g} s) -> {out / name}\n")
         try:
             run_scenario(scenario, out_dir=out / name, progress=progress, stream=stream)
+        except SimulationInterrupted as err:
+            result.failures[name] = str(err)
+            result.interrupted = err.signum
         except SimulationFailed as err:
             result.failures[name] = str(err)
-        if (out / name / "log.npz").is_file():
+        if (out / name / "metrics.json").is_file():
             result.runs[name] = load_run(out / name)
+        if result.interrupted is not None:
+            remaining = [n for n in scenarios if n not in result.failures and n not in
+                         result.runs]
+            for later in remaining:
+                result.failures[later] = f"scenario '{later}' not started: interrupted"
+            result.table = format_table({n: r.metrics for n, r in result.runs.items()})
+            return result
     if "nominal" in result.runs:
         result.figures = write_figures(out, result.runs["nominal"], result.runs.get("disturbed"))
     result.table = format_table({n: r.metrics for n, r in result.runs.items()})
-    (out / "summary.txt").write_text(result.table + "\n")
+    write_text_atomically(out / "summary.txt", result.table + "\n")
     return result
 
 
@@ -191,16 +216,24 @@ def format_table(metrics: dict[str, dict]) -> str:
     return "\n".join(lines)
 
 
-def cli_run(args: argparse.Namespace) -> int:
-    """``aerial-drake run paper [--duration S] [--out DIR] [--seed N] [--quiet] [--json]``."""
+def cli_run(args: argparse.Namespace, overrides: dict | None = None) -> int:
+    """``aerial-drake run paper [--duration S] [--out DIR] [--seed N] [--quiet] [--json]``;
+    ``overrides``: the options already turned into scenario fields (aerial_drake.cli)."""
     out = Path(args.out) / "paper"
-    print(f"running the paper's scenarios {PAPER_SCENARIOS} -> {out}")
+    print(f"running the paper's scenarios {PAPER_SCENARIOS} -> {out}", flush=True)
     try:
-        result = run_paper(out, args.duration, seed=getattr(args, "seed", None),
-                           progress=not args.quiet, stream=sys.stderr)
+        result = run_paper(out, seed=getattr(args, "seed", None), progress=not args.quiet,
+                           stream=sys.stderr, overrides=overrides)
     except (ScenarioError, UnreachablePose) as err:  # found before a simulation starts
-        print(f"error: {err}", file=sys.stderr)
-        return 2
+        return report_error(args, 2, err)
+    except ResultsNotWritten as err:
+        return report_error(args, 3, err)
+    except OutputError as err:
+        return report_error(args, 2, err)
+    if result.interrupted is not None:
+        reasons = "; ".join(result.failures.values())
+        return report_error(args, 128 + result.interrupted, reasons,
+                            f"logs up to the interruption are in {out}")
     print(result.table)
     for path in result.figures:
         if path.suffix == ".png":
@@ -208,7 +241,7 @@ def cli_run(args: argparse.Namespace) -> int:
     folders = ", ".join(str(out / n) for n in result.runs)
     print(f"wrote {out / 'summary.txt'}; run folders {folders}")
     if args.json:
-        print(json.dumps({n: r.metrics for n, r in result.runs.items()}, indent=2))
+        print(strict_json({n: r.metrics for n, r in result.runs.items()}))
     for name, reason in result.failures.items():
         print(f"error: {reason}", file=sys.stderr)
     return 0 if result.completed else 1

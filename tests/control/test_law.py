@@ -87,3 +87,14 @@ def test_vee_takes_skew_part():
     a = np.array([0.3, -1.2, 2.0])
     S = np.array([[1.0, 0.4, -0.7], [0.4, 2.0, 0.9], [-0.7, 0.9, 3.0]])
     np.testing.assert_allclose(vee(hat(a) + S), a, atol=1e-15)
+
+
+def test_desired_attitude_refuses_a_heading_along_the_thrust():
+    """b1d parallel to f_d leaves (13) undefined: an AssumptionViolation saying so, not NaN
+    columns."""
+    from aerial_drake.control.law import AssumptionViolation
+
+    zero = np.zeros(3)
+    b1d = np.array([[0.0, 0.0, 1.0], zero, zero])
+    with pytest.raises(AssumptionViolation, match="heading b1d is parallel"):
+        desired_attitude(np.array([0.0, 0.0, 100.0]), zero, zero, b1d)

@@ -3,6 +3,7 @@ changes no number, progress lines, a diverging plant, and the references it logs
 
 import io
 import json
+import re
 
 import numpy as np
 import pytest
@@ -99,3 +100,30 @@ def test_diverging_plant_stops_with_the_time_of_the_first_non_finite_sample(
     log = np.load(tmp_path / "log.npz")
     assert log["t"].tolist() == [0.0]
     assert {len(log[k]) for k in log.files if k != "layout"} == {1}
+
+
+def test_a_nan_command_stops_the_run_with_time_signal_and_cause(monkeypatch, tmp_path):
+    """A NaN reaching the loop (here the law's command, from its 300th sample on) stops the
+    run with the time, the first non-finite signal and a likely cause; the logs up to then
+    are kept and metrics.json stays strict JSON (Drake's own message was "Spatial force
+    applied on body helicopter contains NaN", with neither)."""
+    from aerial_drake.control.controller import _DecoupledControllerBase
+
+    evaluate_into = _DecoupledControllerBase._evaluate_into
+
+    def poisoned(self, x, com, task, heading, command, diagnostics):
+        evaluate_into(self, x, com, task, heading, command, diagnostics)
+        if self.evaluations > 300:
+            command[0] = float("nan")
+
+    monkeypatch.setattr(_DecoupledControllerBase, "_evaluate_into", poisoned)
+    with pytest.raises(dut.SimulationFailed) as info:
+        dut.run_scenario(short_nominal(), out_dir=tmp_path, progress=False)
+    message = str(info.value)
+    assert re.search(r"t = 0\.\d+ s: the control law's command became non-finite \(first "
+                     r"non-finite signal: 'command'\).*likely cause: ", message), message
+    metrics = json.loads((tmp_path / "metrics.json").read_text(),
+                         parse_constant=lambda c: pytest.fail(f"{c} in metrics.json"))
+    assert metrics["completed"] is False and metrics["failure"] in message
+    log = np.load(tmp_path / "log.npz")
+    assert 0.25 < log["t"][-1] < 0.31 and np.all(np.isfinite(log["plant_state"]))

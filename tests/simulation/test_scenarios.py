@@ -56,10 +56,10 @@ def test_missing_gains_are_named(tmp_path):
 
 @pytest.mark.parametrize("override,match", [
     ({"plant_variant": "quad"}, "plant_variant: 'quad' is not one of"),
-    ({"sigma_min_J3_limit": -1.0}, "sigma_min_J3_limit must be > 0"),
-    ({"f_d_limit": 0.0}, "f_d_limit must be > 0"),
-    ({"duration": -1.0}, "duration must be > 0"),
-    ({"controller_period": -1e-3}, "controller_period must be >= 0"),
+    ({"sigma_min_J3_limit": -1.0}, r"sigma_min_J3_limit must be finite, > 0 and <= 1000; got -1"),
+    ({"f_d_limit": 0.0}, r"f_d_limit must be finite, > 0 and <= 10000 N; got 0\.0"),
+    ({"duration": -1.0}, r"duration must be finite, > 0 and <= 86400 s; got -1\.0"),
+    ({"controller_period": -1e-3}, r"controller_period must be 0 \(continuous feedback\) or"),
 ])
 def test_bad_values(override, match):
     with pytest.raises(ScenarioError, match=match):

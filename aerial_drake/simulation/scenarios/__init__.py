@@ -14,20 +14,23 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-from pydrake.common.yaml import yaml_dump, yaml_load_data, yaml_load_typed
+from pydrake.common.yaml import yaml_dump, yaml_load_typed
 from pydrake.systems.analysis import SimulatorConfig
 
 from aerial_drake.control.law import F_D_LIMIT, SIGMA_MIN_J3_LIMIT, Gains
 from aerial_drake.drake_compat import SimulatorFieldError, translate_simulator_section
 from aerial_drake.robots.models import PLANT_VARIANTS
+from aerial_drake.simulation.scenarios.checks import (
+    DEFAULT_MAX_LOG_MB,
+    ScenarioError,
+    check_values,
+    folder_name,
+    show,
+)
+from aerial_drake.simulation.scenarios.reading import read_scenario_file
 from aerial_drake.trajectories.paper import TrajectoryParams
 
 DISTURBANCE_TARGETS = ("helicopter", "end_effector")
-
-
-class ScenarioError(ValueError):
-    """A scenario file or value is invalid; the message names the field and the fix."""
 
 
 @dataclass
@@ -110,67 +113,26 @@ class Scenario:
     sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT
     f_d_limit: float = F_D_LIMIT
 
+    # Refuse a run whose estimated log (held in memory) exceeds this (MB; docs/reliability.md).
+    max_log_mb: float = DEFAULT_MAX_LOG_MB
+
     def validate(self) -> "Scenario":
-        """Check values; raise ScenarioError naming the field and the fix. Returns self."""
-        if self.plant_variant not in PLANT_VARIANTS:
-            raise ScenarioError(f"plant_variant: '{self.plant_variant}' is not one of "
-                                f"{PLANT_VARIANTS}")
-        for name in ("duration", "log_period"):
-            if not getattr(self, name) > 0:
-                raise ScenarioError(f"{name} must be > 0 (s); got {getattr(self, name)}")
-        if not self.controller_period >= 0:
-            raise ScenarioError("controller_period must be >= 0 (s; 0 = continuous feedback)")
-        try:
-            self.gains.validate()
-        except ValueError as err:
-            raise ScenarioError(str(err)) from None
-        try:
-            self.trajectory.validate()
-        except ValueError as err:
-            raise ScenarioError(f"trajectory: {err}") from None
-        _check_vector("initial.base_position_offset", self.initial.base_position_offset, 3)
-        _check_vector("initial.base_rpy_offset", self.initial.base_rpy_offset, 3)
-        _check_vector("initial.arm_offset", self.initial.arm_offset, 7)
-        a = self.actuation
-        if not a.lag_rise_time >= 0:
-            raise ScenarioError("actuation.lag_rise_time must be >= 0 (s)")
-        if a.saturate and not a.thrust_max > a.thrust_min:
-            raise ScenarioError("actuation.thrust_max must be set and exceed "
-                                f"actuation.thrust_min (N); got {a.thrust_max}")
-        if a.saturate and not a.body_torque_max > 0:
-            raise ScenarioError("actuation.body_torque_max must be set and > 0 (N m); got "
-                                f"{a.body_torque_max}")
-        for name in ("sigma_min_J3_limit", "f_d_limit"):
-            if not getattr(self, name) > 0:
-                raise ScenarioError(f"{name} must be > 0, or the check of the paper's "
-                                    f"assumption can never fire; got {getattr(self, name)}")
-        if self.plant_variant == "rotors" and not self.rotors.drive_gain > 0:
-            raise ScenarioError(f"rotors.drive_gain must be > 0 (N m s/rad); got "
-                                f"{self.rotors.drive_gain}")
-        if self.plant_variant == "rigid" and self.rotors.speed != 0:
-            raise ScenarioError("rotors.speed is set but plant_variant is 'rigid', which has no "
-                                "rotor bodies: use plant_variant: rotors or remove rotors.speed")
-        for i, d in enumerate(self.disturbances):
-            where = f"disturbances[{i}]"
-            if d.target not in DISTURBANCE_TARGETS:
-                raise ScenarioError(f"{where}.target: '{d.target}' is not one of "
-                                    f"{DISTURBANCE_TARGETS}")
-            if not 0 <= d.start < d.stop:
-                raise ScenarioError(f"{where}: need 0 <= start < stop; got [{d.start}, {d.stop}]")
-            _check_vector(f"{where}.force", d.force, 3)
-            _check_vector(f"{where}.torque", d.torque, 3)
+        """Check every value (type, finiteness, range, consistency: :mod:`.checks`); raise
+        ScenarioError naming the field, the value, the allowed range and the fix. Returns
+        self."""
+        check_values(self, PLANT_VARIANTS, DISTURBANCE_TARGETS,
+                     {"K_x": 3, "D_x": 3, "Lambda2_bar": 3, "K_y": 7, "K_z": 7})
         return self
 
-
-def _check_vector(name: str, value, size: int) -> None:
-    arr = np.asarray(value, dtype=float)
-    if arr.shape != (size,) or not np.all(np.isfinite(arr)):
-        raise ScenarioError(f"{name} must be a list of {size} finite numbers; got {value!r}")
+    @property
+    def folder_name(self) -> str:
+        """The run folder's name: the name with unsafe characters replaced (never a path)."""
+        return folder_name(self.name)
 
 
 def _find_bad_field(data, schema, prefix: str = "") -> str | None:
     """The dotted name of the first value in ``data`` that does not fit ``schema``'s type
-    (Drake's loader says what failed to convert, not where)."""
+    (Drake's loader says what failed to convert, not where), with what was expected."""
     if not isinstance(data, dict) or not dataclasses.is_dataclass(schema):
         return None
     types = {f.name: f.type for f in dataclasses.fields(schema)}
@@ -178,22 +140,51 @@ def _find_bad_field(data, schema, prefix: str = "") -> str | None:
         name = f"{prefix}{key}"
         kind = types.get(key)
         if kind is None:
-            return name
-        if dataclasses.is_dataclass(kind):
-            found = _find_bad_field(value, kind, name + ".")
-            if found:
-                return found
+            return f"{name} (not a field of {prefix.rstrip('.') or 'the scenario'}; fields: " \
+                   f"{', '.join(types)})"
+        if dataclasses.is_dataclass(kind) or kind is SimulatorConfig:
+            if not isinstance(value, dict):
+                what = "an empty section" if value is None else f"got {show(value)}"
+                return f"{name} (expected a section of fields, {what}: give its fields, " \
+                       "or remove the line to keep the defaults)"
+            if dataclasses.is_dataclass(kind):
+                found = _find_bad_field(value, kind, name + ".")
+                if found:
+                    return found
             continue
-        item = getattr(kind, "__args__", (None,))[0]
-        values = value if isinstance(value, list) else [value]
-        for v in values:
-            target = item if isinstance(value, list) and item is not None else kind
-            if target is float and not isinstance(v, (int, float)):
-                return f"{name} (expected a number, got {v!r})"
-            if target is str and not isinstance(v, str):
-                return f"{name} (expected text, got {v!r})"
-            if target is bool and not isinstance(v, bool):
-                return f"{name} (expected true or false, got {v!r})"
+        args = getattr(kind, "__args__", None)
+        if args:  # a list
+            if not isinstance(value, list):
+                return f"{name} (expected a list, got {show(value)})"
+            item = args[0]
+            for i, v in enumerate(value):
+                if dataclasses.is_dataclass(item):
+                    if not isinstance(v, dict):
+                        return f"{name}[{i}] (expected a section of fields, got {show(v)})"
+                    found = _find_bad_field(v, item, f"{name}[{i}].")
+                    if found:
+                        return found
+                elif _mismatch(item, v):
+                    return f"{name}[{i}] ({_mismatch(item, v)})"
+            continue
+        if _mismatch(kind, value):
+            return f"{name} ({_mismatch(kind, value)})"
+    return None
+
+
+def _mismatch(kind, v) -> str | None:
+    if kind is float and (isinstance(v, bool) or not isinstance(v, (int, float))):
+        if isinstance(v, str):  # YAML 1.1 reads 1e3 as text; Drake converts it
+            try:
+                float(v)
+                return None
+            except ValueError:
+                pass
+        return f"expected a number, got {show(v)}"
+    if kind is str and not isinstance(v, str):
+        return f"expected text, got {show(v)}"
+    if kind is bool and not isinstance(v, bool):
+        return f"expected true or false, got {show(v)}"
     return None
 
 
@@ -211,31 +202,71 @@ def shipped_scenarios() -> dict[str, Path]:
 def load_scenario(name_or_path: str | Path, *, overrides: dict | None = None) -> Scenario:
     """Load a shipped scenario by name (``"nominal"``) or a YAML file by path, and validate it.
 
-    ``overrides`` replaces top-level fields after loading (e.g. ``{"duration": 2.0}``).
+    ``overrides`` replaces top-level fields after loading (e.g. ``{"duration": 2.0}``); an
+    unknown key or a value of the wrong type is a ScenarioError naming it. Every error names
+    the file.
     """
+    if not isinstance(name_or_path, (str, Path)):
+        raise ScenarioError(f"scenario: expected a shipped scenario's name or a path to a "
+                            f"YAML file, got {type(name_or_path).__name__} {name_or_path!r}")
     path = Path(name_or_path)
-    if not path.suffix:
+    if not path.suffix:  # a shipped name first; else a path (e.g. a folder given by mistake)
         shipped = shipped_scenarios()
-        if str(name_or_path) not in shipped:
+        if str(name_or_path) in shipped:
+            path = shipped[str(name_or_path)]
+        elif not path.exists():
             raise ScenarioError(f"no scenario named '{name_or_path}'; shipped scenarios: "
-                                f"{sorted(shipped)}, or give a path to a .yaml file")
-        path = shipped[str(name_or_path)]
-    if not path.is_file():
-        raise ScenarioError(f"scenario file not found: {path}")
-    data = None
+                                f"{', '.join(sorted(shipped))}, or give a path to a .yaml file")
+    text, data = read_scenario_file(path)
     try:
-        text = path.read_text()
-        data = yaml_load_data(text)
         # A field only some Drake releases have: checked and removed in one place.
-        if isinstance(data, dict) and translate_simulator_section(data.get("simulator"),
-                                                                  "simulator"):
+        if translate_simulator_section(data.get("simulator"), "simulator"):
             text = yaml_dump(data)
+        bad = _find_bad_field(data, Scenario)
+        if bad:
+            raise ScenarioError(f"{path}: {bad}", bad.split(" ")[0])
         scenario = yaml_load_typed(schema=Scenario, data=text)
     except SimulatorFieldError as err:
-        raise ScenarioError(f"{path}: {err}") from None
-    except (RuntimeError, ValueError, TypeError) as err:
+        raise ScenarioError(f"{path}: {err}", "simulator") from None
+    except (RuntimeError, ValueError, TypeError, AssertionError) as err:
+        if isinstance(err, ScenarioError):
+            raise
         where = _find_bad_field(data, Scenario)
-        raise ScenarioError(f"{path}: {where + ': ' if where else ''}{err}") from None
+        raise ScenarioError(f"{path}: {where + ': ' if where else ''}{err or type(err).__name__}",
+                            where.split(" ")[0] if where else None) from None
     if overrides:
-        scenario = dataclasses.replace(scenario, **overrides)
-    return scenario.validate()
+        scenario = apply_overrides(scenario, overrides)
+    try:
+        return scenario.validate()
+    except ScenarioError as err:
+        raise ScenarioError(f"{path}: {err}", err.field) from None
+
+
+def apply_overrides(scenario: Scenario, overrides: dict) -> Scenario:
+    """A copy of ``scenario`` with top-level fields replaced, each checked for its name and
+    type (ScenarioError naming ``overrides['key']``); values are checked by validate()."""
+    if not isinstance(overrides, dict):
+        raise ScenarioError(f"overrides: expected a dict of field -> value, got "
+                            f"{type(overrides).__name__}")
+    kinds = {f.name: f.type for f in dataclasses.fields(Scenario)}
+    changes = {}
+    for key, value in overrides.items():
+        where = f"overrides[{key!r}]"
+        if key not in kinds:
+            raise ScenarioError(f"{where}: not a field of the scenario; fields: "
+                                f"{', '.join(kinds)}", str(key))
+        kind = kinds[key]
+        if kind is float:
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ScenarioError(f"{where}: expected a number, got {show(value)}", key)
+            value = float(value)
+        elif kind in (str, bool) and not isinstance(value, kind):
+            raise ScenarioError(f"{where}: expected {kind.__name__}, got {show(value)}", key)
+        elif getattr(kind, "__args__", None):
+            if not isinstance(value, list):
+                raise ScenarioError(f"{where}: expected a list, got {show(value)}", key)
+        elif isinstance(kind, type) and kind not in (str, bool) and not isinstance(value, kind):
+            raise ScenarioError(f"{where}: expected a {kind.__name__}, got "
+                                f"{type(value).__name__}", key)
+        changes[key] = value
+    return dataclasses.replace(scenario, **changes)
