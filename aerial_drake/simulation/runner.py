@@ -30,6 +30,7 @@ from aerial_drake.robots.models import (
     AerialManipulator,
     nominal_end_effector_offset,
 )
+from aerial_drake.simulation.controllers import ControllerFactory
 from aerial_drake.simulation.diagram import ClosedLoop, build_simulation, input_limits
 from aerial_drake.simulation.metrics import (
     compute_metrics,
@@ -135,12 +136,18 @@ def _prime_held_inputs(loop: ClosedLoop, context: Context) -> None:
     no step."""
     controller = loop.controller
     controller_context = controller.GetMyMutableContextFromRoot(context)
-    if controller.period > 0:
+    if _period(controller) > 0:
         controller.hold_sample(controller_context)
     if loop.lag is not None:
-        cmd = controller.get_command_output_port().Eval(controller_context)
+        cmd = controller.GetOutputPort("command").Eval(controller_context)
         loop.lag.set_initial_output_value(loop.lag.GetMyMutableContextFromRoot(context),
                                           cmd[:4])
+
+
+def _period(controller) -> float:
+    """A controller's sampling period (s); 0 (continuous) for a system without ``period``
+    (aerial_drake.control.interface)."""
+    return float(getattr(controller, "period", 0.0))
 
 
 def _is_terminal(stream) -> bool:
@@ -235,7 +242,7 @@ def _collect_log(scenario: Scenario, loop: ClosedLoop, loggers: dict[str, Vector
     arrays = {k: v[:n] for k, v in arrays.items()}
     references = sample_reference(scenario.trajectory, arrays["t"]).to_vectors()
     arrays.update(zip(("com_reference", "task_reference", "heading_reference"), references))
-    if loop.controller.period > 0 and n > 0:
+    if _period(loop.controller) > 0 and n > 0:
         arrays = _align_held_diagnostics(arrays, loop)
     return arrays
 
@@ -296,7 +303,8 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
                  progress: bool = True, stream: TextIO | None = None,
                  configure: Callable | None = None,
                  realtime_rate: float | None = None,
-                 zero_controller: bool = False) -> RunResult:
+                 zero_controller: bool = False,
+                 controller_factory: ControllerFactory | None = None) -> RunResult:
     """Simulate ``scenario``; write ``log.npz`` and ``metrics.json`` to ``out_dir`` if given.
 
     A failure (an assumption of the paper violated, a diverging state) stops the run with
@@ -304,11 +312,14 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     still written to ``out_dir`` first. ``configure(builder, loop)`` may add systems (e.g. a
     visualiser) before the diagram is built. ``realtime_rate`` overrides the scenario's
     target real-time rate (e.g. 1.0 to watch it). Ctrl-C stops the run the same way, with
-    :class:`SimulationInterrupted`.
+    :class:`SimulationInterrupted`. ``controller_factory`` (``factory(scenario, model) ->
+    system``, :mod:`aerial_drake.simulation.controllers`) overrides the scenario's
+    ``controller.type``.
     """
     scenario.validate()
     stream = stream if stream is not None else sys.stderr
-    builder, loop, loggers = build_simulation(scenario, zero_controller=zero_controller)
+    builder, loop, loggers = build_simulation(scenario, zero_controller=zero_controller,
+                                              controller_factory=controller_factory)
     check_workspace(scenario, loop.controller_model)
     if configure is not None:
         configure(builder, loop)
@@ -355,7 +366,7 @@ def _metrics(scenario: Scenario, loop: ClosedLoop, log: dict, wall: float,
         "simulated_time_s": sim_time,
         "wall_time_s": wall,
         "real_time_factor": sim_time / wall if wall > 0 else None,
-        "controller_evaluations": loop.controller.evaluations,
+        "controller_evaluations": getattr(loop.controller, "evaluations", None),
         "input_limits": limits_by_input(lower, upper),
         "disturbance_response": disturbance_response(
             log["t"], log["diagnostics"],

@@ -18,12 +18,18 @@ import numpy as np
 from pydrake.common.yaml import yaml_dump, yaml_load_data, yaml_load_typed
 from pydrake.systems.analysis import SimulatorConfig
 
+from aerial_drake.control.baselines import BASELINE_TYPES, BaselineParams
 from aerial_drake.control.law import F_D_LIMIT, SIGMA_MIN_J3_LIMIT, Gains
 from aerial_drake.drake_compat import SimulatorFieldError, translate_simulator_section
 from aerial_drake.robots.models import PLANT_VARIANTS
 from aerial_drake.trajectories.paper import TrajectoryParams
 
 DISTURBANCE_TARGETS = ("helicopter", "end_effector")
+#: ``controller.type`` of the paper's controller (Section III), the default.
+PAPER_CONTROLLER = "paper"
+#: The controllers every installation has (more may be registered:
+#: :func:`aerial_drake.simulation.controllers.register_controller`).
+BUILT_IN_CONTROLLERS = (PAPER_CONTROLLER,) + BASELINE_TYPES
 
 
 class ScenarioError(ValueError):
@@ -84,6 +90,16 @@ class Rotors:
 
 
 @dataclass
+class ControllerConfig:
+    """Which controller closes the loop (docs/baselines.md); all use the scenario's gains."""
+
+    # "paper" (Section III), "uncoupled", "static_compensation", or a registered name.
+    type: str = PAPER_CONTROLLER
+    # The baselines' own parameters (used by "uncoupled" and "static_compensation").
+    baseline: BaselineParams = field(default_factory=BaselineParams)
+
+
+@dataclass
 class Scenario:
     """One run of the closed loop."""
 
@@ -109,6 +125,8 @@ class Scenario:
     # Thresholds of the Assumption 1 (sigma_min(J_3)) and 2 (|f_d|, N) checks.
     sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT
     f_d_limit: float = F_D_LIMIT
+    # The controller (default: the paper's).
+    controller: ControllerConfig = field(default_factory=ControllerConfig)
 
     def validate(self) -> "Scenario":
         """Check values; raise ScenarioError naming the field and the fix. Returns self."""
@@ -150,6 +168,7 @@ class Scenario:
         if self.plant_variant == "rigid" and self.rotors.speed != 0:
             raise ScenarioError("rotors.speed is set but plant_variant is 'rigid', which has no "
                                 "rotor bodies: use plant_variant: rotors or remove rotors.speed")
+        self._validate_controller()
         for i, d in enumerate(self.disturbances):
             where = f"disturbances[{i}]"
             if d.target not in DISTURBANCE_TARGETS:
@@ -160,6 +179,17 @@ class Scenario:
             _check_vector(f"{where}.force", d.force, 3)
             _check_vector(f"{where}.torque", d.torque, 3)
         return self
+
+
+    def _validate_controller(self) -> None:
+        from aerial_drake.simulation.controllers import controller_types  # (it imports us)
+        if self.controller.type not in controller_types():
+            raise ScenarioError(f"controller.type: '{self.controller.type}' is not one of "
+                                f"{controller_types()}")
+        try:
+            self.controller.baseline.validate()
+        except ValueError as err:
+            raise ScenarioError(str(err)) from None
 
 
 def _check_vector(name: str, value, size: int) -> None:
