@@ -10,8 +10,6 @@ body torques. Sampled (``period`` > 0) they hold their command between samples e
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 from pydrake.common.value import AbstractValue
 from pydrake.multibody.plant import MultibodyPlant
@@ -19,6 +17,7 @@ from pydrake.multibody.tree import Frame, JacobianWrtVariable, RigidBody
 from pydrake.systems.framework import Context, LeafSystem, ValueProducer
 
 from aerial_drake.control.baselines.arm import fixed_base_task_torque
+from aerial_drake.control.baselines.params import BASELINE_TYPES, BaselineParams
 from aerial_drake.control.baselines.vehicle import (
     body_reference,
     geometric_vehicle_law,
@@ -41,34 +40,6 @@ from aerial_drake.trajectories.reference import (
     unpack_heading_reference,
     unpack_task_reference,
 )
-
-#: The baselines by scenario name (``controller.type``).
-BASELINE_TYPES = ("uncoupled", "static_compensation")
-
-
-@dataclass
-class BaselineParams:
-    """Parameters of the baselines (scenario ``controller.baseline``); their gains are the
-    scenario's ``gains`` (Table II), used as docs/baselines.md says."""
-
-    # The vehicle inertia the attitude law assumes, diagonal (kg m^2); empty: the helicopter
-    # body's own, from the model (Table I: diag(1.46, 0.36, 1.46)).
-    vehicle_inertia: list[float] = field(default_factory=list)
-    # The run stops when the arm's fixed-base task Jacobian's smallest singular value falls
-    # below this (the analogue of Assumption 1).
-    sigma_min_limit: float = 1e-3
-
-    def validate(self, prefix: str = "controller.baseline") -> "BaselineParams":
-        """Raise ValueError naming the field. Returns self."""
-        inertia = np.asarray(self.vehicle_inertia, dtype=float)
-        if inertia.size and (inertia.shape != (3,) or not np.all(np.isfinite(inertia))
-                             or np.any(inertia <= 0)):
-            raise ValueError(f"{prefix}.vehicle_inertia must be empty (the model's) or 3 "
-                             f"finite entries > 0 (kg m^2); got {self.vehicle_inertia!r}")
-        if not (np.isfinite(self.sigma_min_limit) and self.sigma_min_limit > 0):
-            raise ValueError(f"{prefix}.sigma_min_limit must be finite and > 0; got "
-                             f"{self.sigma_min_limit}")
-        return self
 
 
 class BaselineController(_ControllerPorts, LeafSystem):
@@ -202,7 +173,7 @@ class BaselineController(_ControllerPorts, LeafSystem):
         command = np.concatenate([[veh.f], mu, arm.tau])
         diagnostics = error_diagnostics(
             x_g=x_g, x_g_dot=x_g_dot, com_reference=com_ref, p_WE=X_WE.translation(),
-            R_WE=X_WE.rotation().matrix(), q3=q3, p_ed=t.p_ed, R_ed=t.R_ed, q3d=t.q3d,
+            R_WE=X_WE.rotation().matrix(), q3=q3, p_ed=t.p_ed, R_ed=t.R_ed, q3d=float(t.q3d),
             R_b=R, R_d=veh.R_d, e_R=veh.e_R, w_tilde=veh.e_w, z_tilde=arm.s,
             sigma_min_J3=arm.sigma_min, f_d_norm=veh.F_norm, thrust_residual=[0.0, 0.0])
         return command, diagnostics
