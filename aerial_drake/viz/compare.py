@@ -29,7 +29,7 @@ from aerial_drake.viz.plots import (
 COMPARE_FIGURE_NAMES = ("compare_fig3_end_effector", "compare_fig4_com",
                         "compare_fig5_orientation_errors", "compare_fig6_inputs")
 #: Line colours by controller name; others cycle through ``_CYCLE``.
-CONTROLLER_COLORS = {"paper": "black", "uncoupled": "tab:red",
+CONTROLLER_COLORS = {"paper": "black", "uncoupled": "tab:purple",
                      "static_compensation": "tab:blue"}
 _CYCLE = ("tab:green", "tab:purple", "tab:brown", "tab:olive", "tab:cyan")
 
