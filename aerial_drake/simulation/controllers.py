@@ -11,29 +11,32 @@ hand a factory straight to :func:`aerial_drake.simulation.runner.run_scenario`
 
 from __future__ import annotations
 
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 
 from aerial_drake.control.baselines import BASELINE_TYPES, BaselineController
 from aerial_drake.control.controller import make_controller
 from aerial_drake.robots.models import AerialManipulator
-from aerial_drake.simulation.scenarios import PAPER_CONTROLLER, Scenario, ScenarioError
+from aerial_drake.simulation.reference_pose import reference_configuration
+from aerial_drake.trajectories.paper import evaluate_reference
 
-ControllerFactory = Callable[[Scenario, AerialManipulator], object]
+# The scenario argument is a :class:`aerial_drake.simulation.scenarios.Scenario`; it is not
+# imported here because the scenarios import this module to check ``controller.type``.
+ControllerFactory = Callable[[Any, AerialManipulator], object]
+
+#: ``controller.type`` of the paper's controller (Section III), the default.
+PAPER_CONTROLLER = "paper"
 
 
-def _paper(scenario: Scenario, model: AerialManipulator):
+def _paper(scenario: Any, model: AerialManipulator):
     return make_controller(model, scenario.gains, sigma_min_J3_limit=scenario.sigma_min_J3_limit,
                            f_d_limit=scenario.f_d_limit, period=scenario.controller_period)
 
 
-def body_offset_in_heading_frame(scenario: Scenario, model: AerialManipulator) -> np.ndarray:
+def body_offset_in_heading_frame(scenario: Any, model: AerialManipulator) -> np.ndarray:
     """The CoM's offset from the helicopter body at the reference configuration of t = 0, in
     the heading frame [b1d, e3 x b1d, e3]: what the baselines' body reference keeps."""
-    from aerial_drake.simulation.runner import reference_configuration  # (runner imports us)
-    from aerial_drake.trajectories.paper import evaluate_reference
-
     plant = model.plant
     ctx = plant.CreateDefaultContext()
     plant.SetPositions(ctx, reference_configuration(scenario, model))
@@ -45,7 +48,7 @@ def body_offset_in_heading_frame(scenario: Scenario, model: AerialManipulator) -
 
 
 def _baseline(kind: str) -> ControllerFactory:
-    def factory(scenario: Scenario, model: AerialManipulator):
+    def factory(scenario: Any, model: AerialManipulator):
         q3 = model.arm_joints[2]
         return BaselineController(
             model.plant, model.base_body, model.end_effector_frame, q3.velocity_start(),
@@ -73,11 +76,12 @@ def controller_types() -> tuple[str, ...]:
     return tuple(_REGISTRY)
 
 
-def controller_factory(scenario: Scenario) -> ControllerFactory:
-    """The factory of ``scenario.controller.type``; ScenarioError naming the options."""
+def controller_factory(scenario: Any) -> ControllerFactory:
+    """The factory of ``scenario.controller.type`` (checked when the scenario is validated;
+    a KeyError naming the options otherwise)."""
     try:
         return _REGISTRY[scenario.controller.type]
     except KeyError:
-        raise ScenarioError(f"controller.type: '{scenario.controller.type}' is not one of "
-                            f"{controller_types()} (register your own with aerial_drake."
-                            "simulation.controllers.register_controller)") from None
+        raise KeyError(f"controller.type: '{scenario.controller.type}' is not one of "
+                       f"{controller_types()} (register your own with aerial_drake."
+                       "simulation.controllers.register_controller)") from None

@@ -7,7 +7,7 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, TextIO, cast
+from typing import Any, Callable, TextIO
 
 import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
@@ -21,10 +21,7 @@ from aerial_drake.control.compiled import compile_law
 from aerial_drake.control.law import (
     DIAGNOSTICS_LAYOUT,
     AssumptionViolation,
-    desired_attitude,
-    desired_force,
 )
-from aerial_drake.dynamics.equilibrium import solve_configuration
 from aerial_drake.robots.models import (
     ROTOR_DIRECTIONS,
     AerialManipulator,
@@ -39,8 +36,9 @@ from aerial_drake.simulation.metrics import (
     phase_edges,
     rotor_metrics,
 )
+from aerial_drake.simulation.reference_pose import reference_configuration
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
-from aerial_drake.trajectories.paper import compile_reference, evaluate_reference, sample_reference
+from aerial_drake.trajectories.paper import compile_reference, sample_reference
 
 
 class SimulationFailed(RuntimeError):
@@ -60,25 +58,6 @@ class RunResult:
     completed: bool = True
     failure: str | None = None
     out_dir: Path | None = None
-
-
-def reference_configuration(scenario: Scenario, model: AerialManipulator,
-                            t: float = 0.0) -> np.ndarray:
-    """Positions of ``model`` that realise the reference at time ``t`` exactly: CoM on x_d,
-    base attitude R_d of (13) for zero CoM error, end effector on (p_ed, R_ed), q3 = q3d."""
-    ref = evaluate_reference(scenario.trajectory, t)
-    m = model.plant.CalcTotalMass(model.plant.CreateDefaultContext())
-    g = -model.plant.gravity_field().gravity_vector()[2]
-    x = ref.com
-    zero = np.zeros(3)
-    # (10) with zero CoM error; its derivatives are then m times x_d's 3rd and 4th.
-    f_d = desired_force(m, g, x, zero, zero, zero, zero)
-    R_d = desired_attitude(f_d, m * x[3], m * x[4], ref.b1d)[0]
-    # Joint limits are not imposed: the simulated plant does not enforce them, and at t = 0 the
-    # paper's reference needs joint 6 about 0.19 rad past its 120 deg (docs/control.md).
-    return solve_configuration(model, p_WG=x[0], R_WB=R_d, p_WE=ref.p_ed, R_WE=ref.R_ed,
-                               q3=cast(float, ref.q3d),  # one instant: a scalar
-                               respect_joint_limits=False)
 
 
 #: How far (m) the desired end effector may stray from its nominal offset to the desired CoM,

@@ -18,18 +18,14 @@ import numpy as np
 from pydrake.common.yaml import yaml_dump, yaml_load_data, yaml_load_typed
 from pydrake.systems.analysis import SimulatorConfig
 
-from aerial_drake.control.baselines import BASELINE_TYPES, BaselineParams
+from aerial_drake.control.baselines import BaselineParams
 from aerial_drake.control.law import F_D_LIMIT, SIGMA_MIN_J3_LIMIT, Gains
 from aerial_drake.drake_compat import SimulatorFieldError, translate_simulator_section
 from aerial_drake.robots.models import PLANT_VARIANTS
+from aerial_drake.simulation.controllers import PAPER_CONTROLLER, controller_types
 from aerial_drake.trajectories.paper import TrajectoryParams
 
 DISTURBANCE_TARGETS = ("helicopter", "end_effector")
-#: ``controller.type`` of the paper's controller (Section III), the default.
-PAPER_CONTROLLER = "paper"
-#: The controllers every installation has (more may be registered:
-#: :func:`aerial_drake.simulation.controllers.register_controller`).
-BUILT_IN_CONTROLLERS = (PAPER_CONTROLLER,) + BASELINE_TYPES
 
 
 class ScenarioError(ValueError):
@@ -93,7 +89,8 @@ class Rotors:
 class ControllerConfig:
     """Which controller closes the loop (docs/baselines.md); all use the scenario's gains."""
 
-    # "paper" (Section III), "uncoupled", "static_compensation", or a registered name.
+    # "paper" (Section III), "uncoupled", "static_compensation", or a name registered with
+    # aerial_drake.simulation.controllers.register_controller.
     type: str = PAPER_CONTROLLER
     # The baselines' own parameters (used by "uncoupled" and "static_compensation").
     baseline: BaselineParams = field(default_factory=BaselineParams)
@@ -182,7 +179,6 @@ class Scenario:
 
 
     def _validate_controller(self) -> None:
-        from aerial_drake.simulation.controllers import controller_types  # (it imports us)
         if self.controller.type not in controller_types():
             raise ScenarioError(f"controller.type: '{self.controller.type}' is not one of "
                                 f"{controller_types()}")
