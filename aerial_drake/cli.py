@@ -213,6 +213,10 @@ def build_parser() -> argparse.ArgumentParser:
                          "OUT/compare/SCENARIO/CONTROLLER (default: ./out)")
     compare.add_argument("--quiet", action="store_true", help="no progress lines")
     compare.add_argument("--json", action="store_true", help="also print comparison.json")
+    compare.add_argument("--undisturbed", action="store_true",
+                         help="run the scenario without its disturbance windows (named "
+                              "NAME_undisturbed): the reference for how far a disturbance "
+                              "moves the end effector (tools/compare_displacement.py)")
     compare.set_defaults(func=_cmd_compare)
     info = sub.add_parser("info", help="print a summary of the models and scenarios")
     info.set_defaults(func=_cmd_info)

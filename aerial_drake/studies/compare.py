@@ -27,6 +27,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TextIO
 
+import numpy as np
+
 from aerial_drake.dynamics.equilibrium import UnreachablePose
 from aerial_drake.simulation.runner import SimulationFailed, run_scenario
 from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
@@ -50,18 +52,22 @@ class CompareResult:
         return not self.failures
 
 
-def _scenario_for(scenario: str, controller: str, duration: float | None):
-    overrides = {"duration": duration} if duration is not None else None
-    base = load_scenario(scenario, overrides=overrides)
+def _scenario_for(scenario: str, controller: str, duration: float | None,
+                  undisturbed: bool = False):
+    overrides: dict = {"duration": duration} if duration is not None else {}
+    base = load_scenario(scenario, overrides=overrides or None)
+    if undisturbed:  # the same run without its disturbance windows, under its own name
+        base = dataclasses.replace(base, name=f"{base.name}_undisturbed", disturbances=[])
     config = dataclasses.replace(base.controller, type=controller)
     return dataclasses.replace(base, controller=config).validate()
 
 
 def _run_one(scenario: str, controller: str, duration: float | None, out: str,
-             progress: bool = False, stream: TextIO | None = None) -> str | None:
+             progress: bool = False, stream: TextIO | None = None,
+             undisturbed: bool = False) -> str | None:
     """Run ``scenario`` with ``controller`` into ``out``; the failure message or None."""
     try:
-        run_scenario(_scenario_for(scenario, controller, duration), out_dir=out,
+        run_scenario(_scenario_for(scenario, controller, duration, undisturbed), out_dir=out,
                      progress=progress, stream=stream)
     except SimulationFailed as err:
         return str(err)
@@ -70,17 +76,19 @@ def _run_one(scenario: str, controller: str, duration: float | None, out: str,
 
 def run_compare(scenario: str, controllers: tuple[str, ...] = DEFAULT_CONTROLLERS,
                 out_dir: str | Path = "out/compare", duration: float | None = None, *,
-                jobs: int = 1, progress: bool = True,
-                stream: TextIO | None = None) -> CompareResult:
+                jobs: int = 1, progress: bool = True, stream: TextIO | None = None,
+                undisturbed: bool = False) -> CompareResult:
     """Run ``scenario`` (a shipped name or a YAML path) once per controller into
-    ``out_dir/<scenario name>/<controller>/`` and write the overlays and the table there."""
+    ``out_dir/<scenario name>/<controller>/`` and write the overlays and the table there.
+    ``undisturbed``: the scenario without its disturbance windows (named
+    ``<name>_undisturbed``), the reference of :func:`disturbance_displacement`."""
     if not controllers:
         raise ScenarioError("--controllers: name at least one controller")
     if len(set(controllers)) != len(controllers):
         raise ScenarioError(f"--controllers: a controller is named twice: {list(controllers)}")
-    first = _scenario_for(scenario, controllers[0], duration)
+    first = _scenario_for(scenario, controllers[0], duration, undisturbed)
     for name in controllers[1:]:  # every name checked before anything runs
-        _scenario_for(scenario, name, duration)
+        _scenario_for(scenario, name, duration, undisturbed)
     out = Path(out_dir) / first.name
     out.mkdir(parents=True, exist_ok=True)
     result = CompareResult(out_dir=out)
@@ -89,7 +97,8 @@ def run_compare(scenario: str, controllers: tuple[str, ...] = DEFAULT_CONTROLLER
         context = multiprocessing.get_context("spawn")
         with concurrent.futures.ProcessPoolExecutor(min(jobs, len(controllers)),
                                                     mp_context=context) as pool:
-            futures = {name: pool.submit(_run_one, scenario, name, duration, str(folder))
+            futures = {name: pool.submit(_run_one, scenario, name, duration, str(folder),
+                                         undisturbed=undisturbed)
                        for name, folder in folders.items()}
             if progress and stream is not None:
                 stream.write(f"running {list(controllers)} on '{first.name}' in "
@@ -104,7 +113,8 @@ def run_compare(scenario: str, controllers: tuple[str, ...] = DEFAULT_CONTROLLER
         for name, folder in folders.items():
             if progress and stream is not None:
                 stream.write(f"running '{first.name}' with controller '{name}' -> {folder}\n")
-            failure = _run_one(scenario, name, duration, str(folder), progress, stream)
+            failure = _run_one(scenario, name, duration, str(folder), progress, stream,
+                               undisturbed)
             if failure:
                 result.failures[name] = failure
     for name, folder in folders.items():
@@ -134,6 +144,32 @@ def comparison_summary(metrics: dict[str, dict]) -> dict:
     return out
 
 
+def disturbance_displacement(disturbed: Run, undisturbed: Run,
+                             windows: tuple[tuple[float, float], ...] = ((4.0, 5.0), (5.0, 6.0),
+                                                                         (9.0, 10.0),
+                                                                         (10.0, 11.0),
+                                                                         (14.0, 15.0)),
+                             ) -> list[dict]:
+    """How far a disturbance moved the end effector and the CoM: per window ``[a, b]`` (s),
+    the largest ``|y~[:3]_dist - y~[:3]_undist|`` and ``|x~_dist - x~_undist|`` (m) between a
+    run and the same run without its disturbances, sample by sample (docs/baselines.md)."""
+    n = min(len(disturbed.t), len(undisturbed.t))
+    t = disturbed.t[:n]
+    if not np.array_equal(t, undisturbed.t[:n]):
+        raise ValueError("the two runs are not sampled at the same times")
+    ee = np.linalg.norm(disturbed.diagnostic("y_tilde")[:n, :3]
+                        - undisturbed.diagnostic("y_tilde")[:n, :3], axis=1)
+    com = np.linalg.norm(disturbed.diagnostic("x_tilde")[:n]
+                         - undisturbed.diagnostic("x_tilde")[:n], axis=1)
+    out = []
+    for a, b in windows:
+        mask = (t >= a) & (t <= b)
+        out.append({"window_s": [a, b],
+                    "ee_moved_max_m": float(ee[mask].max()) if mask.any() else None,
+                    "com_moved_max_m": float(com[mask].max()) if mask.any() else None})
+    return out
+
+
 def cli_compare(args: argparse.Namespace) -> int:
     """``aerial-drake compare SCENARIO [--controllers A,B] [--jobs N] [--duration S]
     [--out DIR] [--quiet] [--json]``."""
@@ -142,7 +178,7 @@ def cli_compare(args: argparse.Namespace) -> int:
     try:
         result = run_compare(args.scenario, controllers, Path(args.out) / "compare",
                              args.duration, jobs=jobs, progress=not args.quiet,
-                             stream=sys.stderr)
+                             stream=sys.stderr, undisturbed=args.undisturbed)
     except (ScenarioError, UnreachablePose) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2

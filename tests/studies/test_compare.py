@@ -65,3 +65,19 @@ def test_bad_controller_lists_are_refused_before_running(tmp_path, capsys):
                      str(tmp_path)]) == 2
     assert "controller.type: 'lqr'" in capsys.readouterr().err
     assert not (tmp_path / "compare").exists()
+
+
+def test_undisturbed_reference_and_displacement(short_compare):
+    scenario = dut._scenario_for("nominal", "uncoupled", 2.0, undisturbed=True)
+    assert scenario.name == "nominal_undisturbed" and scenario.disturbances == []
+    assert scenario.controller.type == "uncoupled" and scenario.duration == 2.0
+    run = short_compare.runs["uncoupled"]
+    rows = dut.disturbance_displacement(run, run, windows=((0.0, 0.1), (5.0, 6.0)))
+    assert rows[0] == {"window_s": [0.0, 0.1], "ee_moved_max_m": 0.0, "com_moved_max_m": 0.0}
+    assert rows[1]["ee_moved_max_m"] is None  # beyond the 0.3 s run
+    # Against another run: the largest distance between the two end-effector errors.
+    other = short_compare.runs["paper"]
+    moved = dut.disturbance_displacement(run, other, windows=((0.0, 0.3),))[0]
+    expected = np.linalg.norm(run.diagnostic("y_tilde")[:, :3]
+                              - other.diagnostic("y_tilde")[:, :3], axis=1).max()
+    assert moved["ee_moved_max_m"] == pytest.approx(expected)
