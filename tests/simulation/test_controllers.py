@@ -162,3 +162,13 @@ def test_a_user_defined_controller_runs_through_the_scenario_machinery(tmp_path)
     again = run_scenario(dataclasses.replace(scenario, controller=dataclasses.replace(
         scenario.controller, type="paper")), controller_factory=hold_factory, progress=False)
     np.testing.assert_array_equal(again.log["plant_state"], result.log["plant_state"])
+
+
+def test_analyze_refuses_another_controllers_scenario(tmp_path):
+    from aerial_drake.analysis.report import analyze
+
+    path = tmp_path / "s.yaml"
+    path.write_text("name: b\ncontroller:\n  type: uncoupled\n" + _required(load_scenario(
+        "nominal")))
+    with pytest.raises(ScenarioError, match="analyze studies the paper's controller"):
+        analyze(tmp_path / "out", scenario=str(path))
