@@ -1,4 +1,5 @@
-"""Command line: ``aerial-drake run SCENARIO``, ``aerial-drake info``, ``aerial-drake analyze``.
+"""Command line: ``aerial-drake run SCENARIO``, ``aerial-drake compare SCENARIO``,
+``aerial-drake info``, ``aerial-drake analyze``.
 
 ``SCENARIO`` is a shipped scenario name (``nominal``) or a path to a YAML file.
 """
@@ -199,6 +200,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_compare(args: argparse.Namespace) -> int:
+    _compile_first(args)
+    from aerial_drake.studies.compare import cli_compare
+    return cli_compare(args)
+
+
 def _cmd_analyze(args: argparse.Namespace) -> int:
     from aerial_drake.analysis import cli_analyze
     return cli_analyze(args)
@@ -241,6 +248,25 @@ def build_parser() -> argparse.ArgumentParser:
                           "numpy.random.default_rng(SEED) (bounds: aerial_drake.studies.paper."
                           "SEED_BOUNDS); without it runs are deterministic")
     run.set_defaults(func=_cmd_run)
+    compare = sub.add_parser(
+        "compare", parents=[common], help="run a scenario with several controllers; overlay "
+        "figures and a metrics table (docs/baselines.md)")
+    compare.add_argument("scenario", help="shipped scenario name or a YAML file")
+    compare.add_argument("--controllers", default="paper,uncoupled,static_compensation",
+                         help="comma-separated controller types (default: %(default)s)")
+    compare.add_argument("--jobs", type=int, default=None,
+                         help="parallel processes (default: one per controller, at most the "
+                              "number of CPUs; 1 = one after the other, with progress)")
+    compare.add_argument("--duration", type=float, default=None, help="override the duration")
+    compare.add_argument("--out", default="out", help="output folder; runs go to "
+                         "OUT/compare/SCENARIO/CONTROLLER (default: ./out)")
+    compare.add_argument("--quiet", action="store_true", help="no progress lines")
+    compare.add_argument("--json", action="store_true", help="also print comparison.json")
+    compare.add_argument("--undisturbed", action="store_true",
+                         help="run the scenario without its disturbance windows (named "
+                              "NAME_undisturbed): the reference for how far a disturbance "
+                              "moves the end effector (tools/compare_displacement.py)")
+    compare.set_defaults(func=_cmd_compare)
     info = sub.add_parser("info", parents=[common],
                           help="print a summary of the models and scenarios")
     info.set_defaults(func=_cmd_info)

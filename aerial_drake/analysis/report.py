@@ -28,7 +28,7 @@ from aerial_drake.analysis.region_of_attraction import region_of_attraction
 from aerial_drake.analysis.settings import FAST_SETTINGS, FULL_SETTINGS, AnalysisSettings
 from aerial_drake.dynamics.equilibrium import UnreachablePose
 from aerial_drake.robots.models import make_plant
-from aerial_drake.simulation.scenarios import load_scenario
+from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
 
 
 # --- Everything, to a folder ----------------------------------------------------------------
@@ -72,6 +72,11 @@ def analyze(out_dir: str | Path = "out/analysis", *, scenario: str = "nominal",
             stream.flush()
 
     sc = load_scenario(scenario)
+    if sc.controller.type != "paper":
+        # Everything here is the paper controller's theory (its eigenvalues, its Lyapunov
+        # function); analysing the gains of another controller's scenario would mislead.
+        raise ScenarioError(f"analyze studies the paper's controller; '{sc.name}' chooses "
+                            f"controller.type '{sc.controller.type}' (docs/baselines.md)")
     report: dict = {"scenario": sc.name, "equilibria": {}}
     lins = {}
     for name, eq in default_equilibria().items():
@@ -167,7 +172,6 @@ def cli_analyze(args: argparse.Namespace) -> int:
     """``aerial-drake analyze [--out DIR] [--scenario NAME] [--fast] [--seed N] [--quiet]``."""
     import sys
 
-    from aerial_drake.simulation.scenarios import ScenarioError
     settings = FAST_SETTINGS if args.fast else FULL_SETTINGS
     try:
         report = analyze(args.out, scenario=args.scenario, settings=settings, seed=args.seed,

@@ -227,6 +227,15 @@ def rotation_angle(R: np.ndarray) -> float:
     return float(np.arccos(np.clip(0.5 * (np.trace(R) - 1.0), -1.0, 1.0)))
 
 
+def task_error(p_WE: np.ndarray, R_WE: np.ndarray, q3, p_ed: np.ndarray, R_ed: np.ndarray,
+               q3d) -> tuple[np.ndarray, np.ndarray]:
+    """The task error y~ of (17)-(18) and ``R_E R_ed^T``: ``[p_E - p_ed; vee(skew(R_E
+    R_ed^T)); q3 - q3d]`` (World). Every controller's diagnostics use this definition
+    (:mod:`aerial_drake.control.interface`)."""
+    R_err = R_WE @ R_ed.T
+    return np.concatenate([p_WE - p_ed, vee(R_err), [q3 - q3d]]), R_err
+
+
 def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "GainMatrices",
                     gravity: float, *,
                     sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT,
@@ -288,8 +297,7 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
     sigma_min = float(np.sqrt(max(np.linalg.eigvalsh(J3_value.T @ J3_value)[0], 0.0)))
     if not sigma_min > sigma_min_J3_limit:
         raise AssumptionViolation(assumption_1_message(sigma_min, sigma_min_J3_limit))
-    R_err = task.R_WE @ ref.R_ed.T
-    y_t = np.concatenate([task.p_WE - ref.p_ed, vee(R_err), [task.q3 - ref.q3d]])
+    y_t, R_err = task_error(task.p_WE, task.R_WE, task.q3, ref.p_ed, ref.R_ed, ref.q3d)
     y_t_dot = J @ xi - ref.y_d_dot  # (17)
     z = J3 @ rho
     z_d = ref.y_d_dot - J1 @ xg_dot - J2 @ w_b - K.K_y * y_t

@@ -37,6 +37,7 @@ from pydrake.systems.primitives import (
 )
 
 from aerial_drake.control.controller import DecoupledController, make_controller
+from aerial_drake.control.interface import check_controller_ports
 from aerial_drake.robots.models import (
     ROTOR_DIRECTIONS,
     AerialManipulator,
@@ -50,6 +51,8 @@ from aerial_drake.simulation.actuators import (
     lag_time_constant,
     make_base_actuator,
 )
+from aerial_drake.simulation.controllers import ControllerFactory
+from aerial_drake.simulation.controllers import controller_factory as scenario_controller_factory
 from aerial_drake.simulation.disturbances import add_wrench_source
 from aerial_drake.simulation.scenarios import Scenario
 from aerial_drake.trajectories.generator import ReferenceGenerator
@@ -66,7 +69,7 @@ class ClosedLoop:
     diagram: Diagram | None
     simulated_plant: AerialManipulator  # the simulated plant
     controller_model: AerialManipulator  # the controller's own rigid model
-    controller: DecoupledController
+    controller: DecoupledController  # or any system of aerial_drake.control.interface
     reference: ReferenceGenerator
     lag: ActuatorLag | None
     n_arm: int
@@ -167,15 +170,18 @@ def _add_command_path(
 
 
 def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
-                      zero_controller: bool = False) -> ClosedLoop:
+                      zero_controller: bool = False,
+                      controller_factory: ControllerFactory | None = None) -> ClosedLoop:
     """The closed loop of ``scenario`` as one Diagram with exported disturbance inputs.
 
     ``zero_controller`` puts :class:`~aerial_drake.control.controller.ZeroController` (same ports,
     zero outputs) in the controller's place: the benchmarks' baseline, which costs the plant,
-    the reference and the logging but no control law.
+    the reference and the logging but no control law. ``controller_factory`` (``factory(
+    scenario, model) -> system``) overrides the scenario's ``controller.type``.
     """
     builder = DiagramBuilder()
-    loop = add_closed_loop(builder, scenario, zero_controller=zero_controller)
+    loop = add_closed_loop(builder, scenario, zero_controller=zero_controller,
+                           controller_factory=controller_factory)
     for port_name, port in loop.inputs.items():
         builder.ExportInput(port, port_name)
     for port_name, port in loop.outputs.items():
@@ -189,7 +195,8 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
 
 
 def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
-                    zero_controller: bool = False) -> ClosedLoop:
+                    zero_controller: bool = False,
+                    controller_factory: ControllerFactory | None = None) -> ClosedLoop:
     """Add the systems of the closed loop of ``scenario`` to ``builder`` (its disturbance
     inputs left to connect); the returned :class:`ClosedLoop` names its ports."""
     inputs, outputs = {}, {}
@@ -203,9 +210,16 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
     reference.set_name("reference")
     # Sampling: the paper's controller runs at 1 kHz and holds its command between samples
     # (its own discrete state); period 0 means continuous feedback.
-    controller = builder.AddSystem(make_controller(
-        model, scenario.gains, sigma_min_J3_limit=scenario.sigma_min_J3_limit,
-        f_d_limit=scenario.f_d_limit, period=scenario.controller_period, zero=zero_controller))
+    # The controller: the scenario's ``controller.type`` (default the paper's), or the
+    # caller's factory (aerial_drake.simulation.controllers).
+    if zero_controller:
+        system = make_controller(model, scenario.gains, period=scenario.controller_period,
+                                 zero=True)
+    else:
+        factory = controller_factory or scenario_controller_factory(scenario)
+        system = factory(scenario, model)
+        check_controller_ports(system, model.plant.num_multibody_states(), n)
+    controller = builder.AddSystem(system)
     controller.set_name("controller")
     for port in ("com_reference", "task_reference", "heading_reference"):
         builder.Connect(reference.GetOutputPort(port), controller.GetInputPort(port))
@@ -213,18 +227,18 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
 
     state_out = plant.get_state_output_port()
     if scenario.plant_variant == "rigid":
-        builder.Connect(state_out, controller.get_state_input_port())
+        builder.Connect(state_out, controller.GetInputPort("state"))
     else:
         # The rotors plant's state without the rotors' coordinates is the rigid model's.
         nx = sim.plant.num_multibody_states()
         selector = builder.AddSystem(MatrixGain(np.eye(nx)[sim.rigid_state_indices]))
         selector.set_name("model_state")
         builder.Connect(state_out, selector.get_input_port())
-        builder.Connect(selector.get_output_port(), controller.get_state_input_port())
+        builder.Connect(selector.get_output_port(), controller.GetInputPort("state"))
 
-    command = controller.get_command_output_port()
+    command = controller.GetOutputPort("command")
     outputs["command"] = command
-    outputs["diagnostics"] = controller.get_diagnostics_output_port()
+    outputs["diagnostics"] = controller.GetOutputPort("diagnostics")
 
     base_cmd, joint_cmd, applied, lag = _add_command_path(builder, scenario, model, command)
     outputs["applied_command"] = applied
@@ -293,6 +307,7 @@ LOGGED_PORTS = ("plant_state", "command", "applied_command", "diagnostics", "rot
 
 def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = None,
                      zero_controller: bool = False,
+                     controller_factory: ControllerFactory | None = None,
                      ) -> tuple[DiagramBuilder, ClosedLoop, dict[str, VectorLogSink]]:
     """Add the closed loop's systems (:func:`add_closed_loop`, not nested in a Diagram of
     their own), the scenario's disturbance sources and loggers to ``builder``.
@@ -301,7 +316,8 @@ def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = Non
     (``diagram`` None; its ports by name) and the loggers by port name.
     """
     builder = builder or DiagramBuilder()
-    loop = add_closed_loop(builder, scenario, zero_controller=zero_controller)
+    loop = add_closed_loop(builder, scenario, zero_controller=zero_controller,
+                           controller_factory=controller_factory)
     for target, port in (("helicopter", "helicopter_wrench"),
                          ("end_effector", "end_effector_wrench")):
         source = add_wrench_source(builder, scenario.disturbances, target)

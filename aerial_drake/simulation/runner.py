@@ -8,7 +8,7 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, TextIO, cast
+from typing import Any, Callable, TextIO
 
 import numpy as np
 from pydrake.common.yaml import yaml_dump_typed
@@ -22,15 +22,13 @@ from aerial_drake.control.compiled import compile_law
 from aerial_drake.control.law import (
     DIAGNOSTICS_LAYOUT,
     AssumptionViolation,
-    desired_attitude,
-    desired_force,
 )
-from aerial_drake.dynamics.equilibrium import solve_configuration
 from aerial_drake.robots.models import (
     ROTOR_DIRECTIONS,
     AerialManipulator,
     nominal_end_effector_offset,
 )
+from aerial_drake.simulation.controllers import ControllerFactory
 from aerial_drake.simulation.diagram import ClosedLoop, build_simulation, input_limits
 from aerial_drake.simulation.interrupts import deferred, handling, signal_name
 from aerial_drake.simulation.metrics import (
@@ -52,9 +50,10 @@ from aerial_drake.simulation.outputs import (
     strict_json,
     write_result_set,
 )
+from aerial_drake.simulation.reference_pose import reference_configuration
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
 from aerial_drake.simulation.scenarios.checks import estimated_log_mb
-from aerial_drake.trajectories.paper import compile_reference, evaluate_reference, sample_reference
+from aerial_drake.trajectories.paper import compile_reference, sample_reference
 
 
 class SimulationFailed(RuntimeError):
@@ -83,25 +82,6 @@ class RunResult:
     completed: bool = True
     failure: str | None = None
     out_dir: Path | None = None
-
-
-def reference_configuration(scenario: Scenario, model: AerialManipulator,
-                            t: float = 0.0) -> np.ndarray:
-    """Positions of ``model`` that realise the reference at time ``t`` exactly: CoM on x_d,
-    base attitude R_d of (13) for zero CoM error, end effector on (p_ed, R_ed), q3 = q3d."""
-    ref = evaluate_reference(scenario.trajectory, t)
-    m = model.plant.CalcTotalMass(model.plant.CreateDefaultContext())
-    g = -model.plant.gravity_field().gravity_vector()[2]
-    x = ref.com
-    zero = np.zeros(3)
-    # (10) with zero CoM error; its derivatives are then m times x_d's 3rd and 4th.
-    f_d = desired_force(m, g, x, zero, zero, zero, zero)
-    R_d = desired_attitude(f_d, m * x[3], m * x[4], ref.b1d)[0]
-    # Joint limits are not imposed: the simulated plant does not enforce them, and at t = 0 the
-    # paper's reference needs joint 6 about 0.19 rad past its 120 deg (docs/control.md).
-    return solve_configuration(model, p_WG=x[0], R_WB=R_d, p_WE=ref.p_ed, R_WE=ref.R_ed,
-                               q3=cast(float, ref.q3d),  # one instant: a scalar
-                               respect_joint_limits=False)
 
 
 #: How far (m) the desired end effector may stray from its nominal offset to the desired CoM,
@@ -159,12 +139,18 @@ def _prime_held_inputs(loop: ClosedLoop, context: Context) -> None:
     no step."""
     controller = loop.controller
     controller_context = controller.GetMyMutableContextFromRoot(context)
-    if controller.period > 0:
+    if _period(controller) > 0:
         controller.hold_sample(controller_context)
     if loop.lag is not None:
-        cmd = controller.get_command_output_port().Eval(controller_context)
+        cmd = controller.GetOutputPort("command").Eval(controller_context)
         loop.lag.set_initial_output_value(loop.lag.GetMyMutableContextFromRoot(context),
                                           cmd[:4])
+
+
+def _period(controller) -> float:
+    """A controller's sampling period (s); 0 (continuous) for a system without ``period``
+    (aerial_drake.control.interface)."""
+    return float(getattr(controller, "period", 0.0))
 
 
 def _is_terminal(stream) -> bool:
@@ -263,7 +249,7 @@ def _collect_log(scenario: Scenario, loop: ClosedLoop, loggers: dict[str, Vector
     arrays = {k: v[:n] for k, v in arrays.items()}
     references = sample_reference(scenario.trajectory, arrays["t"]).to_vectors()
     arrays.update(zip(("com_reference", "task_reference", "heading_reference"), references))
-    if loop.controller.period > 0 and n > 0:
+    if _period(loop.controller) > 0 and n > 0:
         arrays = _align_held_diagnostics(arrays, loop)
     return arrays
 
@@ -319,7 +305,8 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
                  progress: bool = True, stream: TextIO | None = None,
                  configure: Callable | None = None,
                  realtime_rate: float | None = None,
-                 zero_controller: bool = False) -> RunResult:
+                 zero_controller: bool = False,
+                 controller_factory: ControllerFactory | None = None) -> RunResult:
     """Simulate ``scenario``; write ``log.npz``, ``scenario.yaml`` and ``metrics.json`` (last)
     to the folder ``out_dir`` if given (docs/reliability.md).
 
@@ -331,7 +318,8 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     ``realtime_rate`` overrides the scenario's target real-time rate (e.g. 1.0 to watch it).
     SIGINT (Ctrl-C), SIGTERM and SIGHUP stop the run the same way, with
     :class:`SimulationInterrupted`; one arriving while the files are written is held until
-    they are complete.
+    they are complete. ``controller_factory`` (``factory(scenario, model) -> system``,
+    :mod:`aerial_drake.simulation.controllers`) overrides the scenario's ``controller.type``.
     """
     if not isinstance(scenario, Scenario):
         raise ScenarioError(f"scenario: expected a Scenario, got {type(scenario).__name__} "
@@ -347,7 +335,7 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     try:
         with handling():
             return _run_locked(scenario, lock, progress, stream, configure, realtime_rate,
-                               zero_controller)
+                               zero_controller, controller_factory)
     finally:
         if lock is not None:
             lock.release()
@@ -355,11 +343,13 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
 
 def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
                 stream: TextIO | None, configure: Callable | None,
-                realtime_rate: float | None, zero_controller: bool) -> RunResult:
+                realtime_rate: float | None, zero_controller: bool,
+                controller_factory: ControllerFactory | None) -> RunResult:
     stream = stream if stream is not None else sys.stderr
     if lock is not None:
         _note_replaced_results(scenario, lock.folder, stream)
-    builder, loop, loggers = build_simulation(scenario, zero_controller=zero_controller)
+    builder, loop, loggers = build_simulation(scenario, zero_controller=zero_controller,
+                                              controller_factory=controller_factory)
     check_workspace(scenario, loop.controller_model)
     if configure is not None:
         configure(builder, loop)
@@ -433,7 +423,7 @@ def _metrics(scenario: Scenario, loop: ClosedLoop, log: dict, wall: float,
         "simulated_time_s": sim_time,
         "wall_time_s": wall,
         "real_time_factor": sim_time / wall if wall > 0 else None,
-        "controller_evaluations": loop.controller.evaluations,
+        "controller_evaluations": getattr(loop.controller, "evaluations", None),
         "input_limits": limits_by_input(lower, upper),
         "disturbance_response": disturbance_response(
             log["t"], log["diagnostics"],

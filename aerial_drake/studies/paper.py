@@ -209,7 +209,8 @@ def format_table(metrics: dict[str, dict]) -> str:
             lambda m, s=side: f"{m['rotors'][s]['drive_torque_rms_N_m']:.2f} / "
                               f"{m['rotors'][s]['drive_torque_max_abs_N_m']:.2f}")
     width = max(len(label) for label, _ in rows) + 2
-    col = max([12] + [len(c) + 2 for _, cells in rows for c in cells])
+    col = max([12] + [len(c) + 2 for _, cells in rows for c in cells]
+              + [len(n) + 2 for n in names])
     lines = [" " * width + "".join(f"{n:>{col}}" for n in names)]
     lines += [f"{label:<{width}}" + "".join(f"{c:>{col}}" for c in cells)
               for label, cells in rows]

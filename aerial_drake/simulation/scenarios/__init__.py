@@ -17,9 +17,11 @@ from pathlib import Path
 from pydrake.common.yaml import yaml_dump, yaml_load_typed
 from pydrake.systems.analysis import SimulatorConfig
 
+from aerial_drake.control.baselines import BaselineParams
 from aerial_drake.control.law import F_D_LIMIT, SIGMA_MIN_J3_LIMIT, Gains
 from aerial_drake.drake_compat import SimulatorFieldError, translate_simulator_section
 from aerial_drake.robots.models import PLANT_VARIANTS
+from aerial_drake.simulation.controllers import PAPER_CONTROLLER, controller_types
 from aerial_drake.simulation.scenarios.checks import (
     DEFAULT_MAX_LOG_MB,
     ScenarioError,
@@ -87,6 +89,17 @@ class Rotors:
 
 
 @dataclass
+class ControllerConfig:
+    """Which controller closes the loop (docs/baselines.md); all use the scenario's gains."""
+
+    # "paper" (Section III), "uncoupled", "static_compensation", or a name registered with
+    # aerial_drake.simulation.controllers.register_controller.
+    type: str = PAPER_CONTROLLER
+    # The baselines' own parameters (used by "uncoupled" and "static_compensation").
+    baseline: BaselineParams = field(default_factory=BaselineParams)
+
+
+@dataclass
 class Scenario:
     """One run of the closed loop."""
 
@@ -112,6 +125,8 @@ class Scenario:
     # Thresholds of the Assumption 1 (sigma_min(J_3)) and 2 (|f_d|, N) checks.
     sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT
     f_d_limit: float = F_D_LIMIT
+    # The controller (default: the paper's).
+    controller: ControllerConfig = field(default_factory=ControllerConfig)
 
     # Refuse a run whose estimated log (held in memory) exceeds this (MB; docs/reliability.md).
     max_log_mb: float = DEFAULT_MAX_LOG_MB
@@ -122,7 +137,18 @@ class Scenario:
         self."""
         check_values(self, PLANT_VARIANTS, DISTURBANCE_TARGETS,
                      {"K_x": 3, "D_x": 3, "Lambda2_bar": 3, "K_y": 7, "K_z": 7})
+        self._validate_controller()
         return self
+
+    def _validate_controller(self) -> None:
+        if self.controller.type not in controller_types():
+            raise ScenarioError(f"controller.type: '{self.controller.type}' is not one of "
+                                f"{controller_types()}", "controller.type")
+        try:
+            self.controller.baseline.validate()
+        except ValueError as err:
+            # The baseline's message starts with the field's dotted name.
+            raise ScenarioError(str(err), str(err).split(" ", 1)[0]) from None
 
     @property
     def folder_name(self) -> str:

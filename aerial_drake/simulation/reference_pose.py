@@ -1,0 +1,37 @@
+"""The configuration that realises the reference at one instant: where a run starts
+(:func:`aerial_drake.simulation.runner.set_initial_state`) and what the baselines' body
+reference is measured from (:mod:`aerial_drake.simulation.controllers`)."""
+
+from __future__ import annotations
+
+from typing import Any, cast
+
+import numpy as np
+
+from aerial_drake.control.law import desired_attitude, desired_force
+from aerial_drake.dynamics.equilibrium import solve_configuration
+from aerial_drake.robots.models import AerialManipulator
+from aerial_drake.trajectories.paper import evaluate_reference
+
+
+def reference_configuration(scenario: Any, model: AerialManipulator,
+                            t: float = 0.0) -> np.ndarray:
+    """Positions of ``model`` that realise ``scenario``'s reference at time ``t`` exactly: CoM
+    on x_d, base attitude R_d of (13) for zero CoM error, end effector on (p_ed, R_ed),
+    q3 = q3d. (``scenario`` a :class:`~aerial_drake.simulation.scenarios.Scenario`; not
+    imported here, as the scenarios import the controllers, which import this.)"""
+    ref = evaluate_reference(scenario.trajectory, t)
+    m = model.plant.CalcTotalMass(model.plant.CreateDefaultContext())
+    g = -model.plant.gravity_field().gravity_vector()[2]
+    x = ref.com
+    zero = np.zeros(3)
+    # (10) with zero CoM error; its derivatives are then m times x_d's 3rd and 4th.
+    f_d = desired_force(m, g, x, zero, zero, zero, zero)
+    R_d = desired_attitude(f_d, m * x[3], m * x[4], ref.b1d)[0]
+    # Joint limits are not imposed: the simulated plant does not enforce them, and at t = 0 the
+    # paper's reference needs joint 6 about 0.19 rad past its 120 deg (docs/control.md).
+    return solve_configuration(model, p_WG=x[0], R_WB=R_d, p_WE=ref.p_ed, R_WE=ref.R_ed,
+                               q3=cast(float, ref.q3d),  # one instant: a scalar
+                               respect_joint_limits=False)
+
+
