@@ -46,6 +46,17 @@ from aerial_drake.trajectories.reference import (
 
 INPUT_PORTS = ("state", "com_reference", "task_reference", "heading_reference")
 OUTPUT_PORTS = ("command", "diagnostics")
+#: The diagnostics entries every controller fills (:func:`error_diagnostics`); the others may
+#: be NaN ("not defined by this controller").
+REQUIRED_DIAGNOSTICS = ("x_tilde", "x_tilde_dot", "y_tilde", "com_error",
+                        "base_attitude_error", "ee_position_error", "ee_orientation_error")
+
+
+def required_diagnostics_columns() -> np.ndarray:
+    """Column indices of :data:`REQUIRED_DIAGNOSTICS` in the diagnostics vector."""
+    sl = diagnostics_slices()
+    return np.concatenate([np.arange(DIAGNOSTICS_SIZE)[sl[name]]
+                           for name in REQUIRED_DIAGNOSTICS])
 
 
 def port_sizes(num_states: int, n_arm: int) -> dict[str, int]:

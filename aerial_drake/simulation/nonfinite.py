@@ -13,10 +13,20 @@ from typing import Any
 
 import numpy as np
 
+from aerial_drake.control.interface import required_diagnostics_columns
+
 #: The logged signals searched for the first non-finite value, in the loop's order (the
 #: references are computed from the time alone and finite by construction).
 CHECKED_SIGNALS = ("plant_state", "command", "applied_command", "diagnostics",
                     "rotor_drive_torque")
+
+
+def _checked(name: str, values: np.ndarray) -> np.ndarray:
+    """The part of a signal that must be finite: all of it, but for the diagnostics only the
+    entries every controller fills (control.interface: a baseline leaves others NaN)."""
+    if name == "diagnostics":
+        return values[..., required_diagnostics_columns()]
+    return values
 
 
 def first_non_finite_sample(arrays: dict[str, np.ndarray]) -> tuple[int, str] | None:
@@ -27,7 +37,7 @@ def first_non_finite_sample(arrays: dict[str, np.ndarray]) -> tuple[int, str] | 
     for name in CHECKED_SIGNALS:
         if name not in arrays or arrays[name].size == 0:
             continue
-        bad = ~np.all(np.isfinite(arrays[name]), axis=1)
+        bad = ~np.all(np.isfinite(_checked(name, arrays[name])), axis=1)
         if bad.any() and (first is None or int(np.argmax(bad)) < first[0]):
             first = (int(np.argmax(bad)), name)
     return first
@@ -69,7 +79,7 @@ def first_non_finite_output(loop: Any, root_context: Any) -> str | None:
             value = port.Eval(port.get_system().GetMyContextFromRoot(root_context))
         except Exception:  # the value itself cannot be computed there: that one
             return name
-        if not np.all(np.isfinite(value)):
+        if not np.all(np.isfinite(_checked(name, np.asarray(value)))):
             return name
     return None
 

@@ -26,12 +26,18 @@ class BaselineParams:
 
     def validate(self, prefix: str = "controller.baseline") -> "BaselineParams":
         """Raise ValueError naming the field. Returns self."""
-        inertia = np.asarray(self.vehicle_inertia, dtype=float)
-        if inertia.size and (inertia.shape != (3,) or not np.all(np.isfinite(inertia))
-                             or np.any(inertia <= 0)):
+        try:
+            inertia = np.asarray(self.vehicle_inertia, dtype=float)
+        except (TypeError, ValueError):
+            inertia = np.full(1, np.nan)  # not a list of numbers: refused below
+        if not isinstance(self.vehicle_inertia, (list, tuple)) or (inertia.size and (
+                inertia.shape != (3,) or not np.all(np.isfinite(inertia))
+                or np.any(inertia <= 0))):
             raise ValueError(f"{prefix}.vehicle_inertia must be empty (the model's) or 3 "
                              f"finite entries > 0 (kg m^2); got {self.vehicle_inertia!r}")
-        if not (np.isfinite(self.sigma_min_limit) and self.sigma_min_limit > 0):
-            raise ValueError(f"{prefix}.sigma_min_limit must be finite and > 0; got "
-                             f"{self.sigma_min_limit}")
+        limit = self.sigma_min_limit
+        if isinstance(limit, bool) or not isinstance(limit, (int, float)) \
+                or not (np.isfinite(limit) and limit > 0):
+            raise ValueError(f"{prefix}.sigma_min_limit must be a finite number > 0; got "
+                             f"{limit!r}")
         return self
