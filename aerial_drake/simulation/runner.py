@@ -296,7 +296,8 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
                  progress: bool = True, stream: TextIO | None = None,
                  configure: Callable | None = None,
                  realtime_rate: float | None = None,
-                 zero_controller: bool = False) -> RunResult:
+                 zero_controller: bool = False,
+                 before_start: Callable[[], None] | None = None) -> RunResult:
     """Simulate ``scenario``; write ``log.npz`` and ``metrics.json`` to ``out_dir`` if given.
 
     A failure (an assumption of the paper violated, a diverging state) stops the run with
@@ -304,7 +305,9 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     still written to ``out_dir`` first. ``configure(builder, loop)`` may add systems (e.g. a
     visualiser) before the diagram is built. ``realtime_rate`` overrides the scenario's
     target real-time rate (e.g. 1.0 to watch it). Ctrl-C stops the run the same way, with
-    :class:`SimulationInterrupted`.
+    :class:`SimulationInterrupted`. ``before_start()`` is called once everything is built and
+    the initial state set, just before the simulation (and its wall clock) starts: e.g. to
+    wait for a browser to open the live view.
     """
     scenario.validate()
     stream = stream if stream is not None else sys.stderr
@@ -321,6 +324,8 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     context = simulator.get_mutable_context()
     plant_context = loop.simulated_plant.plant.GetMyMutableContextFromRoot(context)
     set_initial_state(scenario, loop, plant_context)
+    if before_start is not None:
+        before_start()
     progress_lines = _Progress(scenario.duration, stream if progress else None)
     failure, interrupted, wall = _simulate(
         simulator, loop, pause_times(scenario.duration, scenario.log_period), progress_lines)
