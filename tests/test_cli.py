@@ -98,7 +98,7 @@ def test_fig6_zooms_on_the_start_and_draws_each_inputs_limits(runs):
     out, _ = runs
     run = plots.load_run(out / "nominal")
     fig = plots.figure_inputs(run)
-    u, t = run.log["applied_command"], run.t
+    u = run.log["applied_command"]
     limits = run.input_limits()
     index = {n: k for k, n in enumerate(plots.INPUT_NAMES)}
     for row, names in enumerate(plots.INPUT_ROWS):

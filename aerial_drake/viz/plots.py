@@ -289,7 +289,7 @@ _ROW_LABELS = {"thrust": "$f$ (N)", "mu_x": "$\\mu$ (N m)"}
 _MU_COLORS = ("tab:blue", "tab:orange", "tab:green")
 
 
-def _input_limit_lines(ax, names: list[str], colors: list[str], limits: dict,
+def _input_limit_lines(ax, names: tuple[str, ...], colors: list[str], limits: dict,
                        annotate: bool) -> None:
     """Dashed lines at the limits of the inputs ``names`` drawn on ``ax``: once in grey when
     they share their limits, else each in its input's colour."""
