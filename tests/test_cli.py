@@ -190,3 +190,21 @@ def test_a_sufficient_condition_not_met_is_not_called_instability():
     text = "\n".join(format_lee(lee))
     assert "sufficient, not necessary" in text and "not a sign of instability" in text
     assert "VIOLATED" not in text
+
+
+def test_a_run_without_plots_never_imports_matplotlib(tmp_path):
+    """Plotting is the only reason a run imports Matplotlib (``-X importtime`` lists every
+    module imported)."""
+    import subprocess
+    import sys
+
+    def imported(*flags: str) -> str:
+        done = subprocess.run(
+            [sys.executable, "-X", "importtime", "-m", "aerial_drake", "run", "nominal",
+             "--duration", "0.05", "--quiet", "--out", str(tmp_path), *flags],
+            capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr[-2000:]
+        return done.stderr
+
+    assert "matplotlib" not in imported("--no-plots")
+    assert "matplotlib" in imported()
