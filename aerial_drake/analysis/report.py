@@ -137,7 +137,7 @@ def format_open_loop(ol: dict) -> list[str]:
                  f"[B, AB, ..., A^k B] for k = 0, 1, ...: {ol['controllability_rank_growth']} "
                  f"(full: {ol['states']}); rank B = {ol['rank_B']} of {ol['states'] // 2} "
                  "velocities (underactuated: thrust acts along the body z only)")
-    if raw != scaled:
+    if not raw and scaled and ol["controllability_matrix_conditioning"] < 1e-14:
         lines.append(f"  Drake's IsControllable(A, B) says {raw} only because Kalman's matrix "
                      f"is numerically singular (sigma_min/sigma_max "
                      f"{ol['controllability_matrix_conditioning']:.1e}, below double "
@@ -146,8 +146,9 @@ def format_open_loop(ol: dict) -> list[str]:
                      f"(ratio {ol.get('time_scaled_conditioning', float('nan')):.1e}); on it "
                      f"IsControllable says {scaled}.")
     else:
-        lines.append(f"  Drake's IsControllable: {raw} on (A, B) and on the time-scaled "
-                     "(A, B)/|A|")
+        lines.append(f"  Drake's IsControllable: {raw} on (A, B), {scaled} on the time-scaled "
+                     f"(A, B)/|A| (Kalman matrix sigma_min/sigma_max "
+                     f"{ol['controllability_matrix_conditioning']:.1e})")
     return lines
 
 
@@ -185,8 +186,9 @@ def format_report(report: dict) -> str:
     for name, e in report["equilibria"].items():
         cl, ol = e["closed_loop"], e["open_loop"]
         eq = cl["equilibrium"]
-        lines.append(f"hover '{name}': CoM {eq['p_WG_m']} m, yaw {eq['yaw_rad']:g} rad, end "
-                     f"effector {np.round(eq['p_WE_m'], 3).tolist()} m, q3 {eq['q3_rad']:g}; "
+        lines.append(f"hover '{name}': CoM {(np.round(eq['p_WG_m'], 3) + 0.0).tolist()} m, yaw "
+                     f"{eq['yaw_rad']:g} rad, end effector "
+                     f"{(np.round(eq['p_WE_m'], 3) + 0.0).tolist()} m, q3 {eq['q3_rad']:g}; "
                      f"thrust {eq['thrust_N']:.1f} N")
         lines.append(f"  closed loop: {cl['states']} states, |x_dot| at equilibrium "
                      f"{cl['derivative_residual']:.1e}, max relative eigenvalue mismatch "
