@@ -10,9 +10,10 @@ scenario as run). From a nominal and, optionally, a disturbed run this module wr
 - ``fig6_inputs``: thrust, body torques and each joint torque that reached the nominal plant,
   each with its own limits dashed, over the whole run and over its first 50 ms;
 
-each as ``.png`` and ``.pdf``. As in the paper: nominal black, disturbed grey, the
-disturbance on the helicopter shaded green and the one at the end effector orange (the windows
-come from the nominal run's scenario).
+each as ``.png`` and ``.pdf``. As in the paper: nominal black, disturbed grey (each labelled
+by its run's name), the disturbance on the helicopter shaded green and the one at the end
+effector orange (the windows of every run's scenario, each once). :func:`series` colours and
+labels any number of runs for Figs. 3-5 (``aerial-drake plot``, :mod:`aerial_drake.viz.run_plots`).
 
 Nothing is recomputed from the model: the actual CoM and end-effector positions are the
 reference plus the controller's logged errors (``x_tilde = x_g - x_d``,
@@ -152,18 +153,20 @@ DESIRED_COLORS = (DESIRED_COLOR, "tab:pink", "darkgoldenrod", "tab:gray")
 Series = tuple[Run, str, str]
 
 
-def _runs(nominal: Run, disturbed: Run | None) -> list[Series]:
-    runs = [(nominal, NOMINAL_COLOR, "nominal")]
-    if disturbed is not None:
-        runs.append((disturbed, DISTURBED_COLOR, "disturbed"))
-    return runs
-
-
 def series(runs: list[Run], labels: list[str] | None = None) -> list[Series]:
     """Colour and label each of ``runs`` (labels default to the runs' names)."""
     labels = labels if labels is not None else [run.name for run in runs]
     return [(run, RUN_COLORS[k % len(RUN_COLORS)], label)
             for k, (run, label) in enumerate(zip(runs, labels))]
+
+
+def _runs(nominal: Run, disturbed: Run | None) -> list[Series]:
+    """The paper's pair, black and grey, each labelled by its run's name (the paper run's are
+    "nominal" and "disturbed"); "nominal"/"disturbed" if the two share a name."""
+    runs = [nominal] + ([disturbed] if disturbed is not None else [])
+    names = [run.name for run in runs]
+    return series(runs, None if len(set(names)) == len(names) else
+                  ["nominal", "disturbed"][:len(runs)])
 
 
 def _as_series(first, second) -> list[Series]:
