@@ -14,6 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
+# (The standard library only: importing it starts and compiles nothing.)
+from aerial_drake.viz.live import WAIT_TIMEOUT_S
+
 
 def _cmd_info(args: argparse.Namespace) -> int:
     from aerial_drake.robots.models import PLANT_VARIANTS, make_plant
@@ -129,6 +132,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from aerial_drake.simulation.runner import SimulationFailed, SimulationInterrupted, run_scenario
     from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
 
+    if (args.no_wait or args.hold or args.wait_timeout != WAIT_TIMEOUT_S) and not args.meshcat:
+        print("error: --no-wait, --wait-timeout and --hold are for the live view; add --meshcat",
+              file=sys.stderr)
+        return 2
     # Both of Section IV's runs and Figs. 3-6 (aerial_drake.studies.paper).
     if args.scenario == "paper":
         if args.meshcat or args.record or args.realtime_rate is not None:
@@ -296,9 +303,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--no-wait", action="store_true",
                      help="with --meshcat: start the simulation at once, without waiting for a "
                           "browser to open the page")
-    run.add_argument("--wait-timeout", type=float, default=120.0,
+    run.add_argument("--wait-timeout", type=float, default=WAIT_TIMEOUT_S,
                      help="with --meshcat: seconds to wait for a browser before starting "
-                          "anyway (default: 120)")
+                          f"anyway (default: {WAIT_TIMEOUT_S:g})")
     run.add_argument("--hold", action="store_true",
                      help="with --meshcat: keep serving the finished run (its replay under "
                           "Open Controls > Animations) until Ctrl-C")

@@ -208,3 +208,9 @@ def test_a_run_without_plots_never_imports_matplotlib(tmp_path):
 
     assert "matplotlib" not in imported("--no-plots")
     assert "matplotlib" in imported()
+
+
+@pytest.mark.parametrize("flag", [["--hold"], ["--no-wait"], ["--wait-timeout", "5"]])
+def test_live_view_options_need_meshcat(flag, capsys):
+    assert dut(["run", "nominal", "--duration", SHORT, *flag]) == 2
+    assert "add --meshcat" in capsys.readouterr().err
