@@ -1,5 +1,5 @@
-"""Command line: ``aerial-drake run SCENARIO``, ``aerial-drake compare SCENARIO``,
-``aerial-drake info``, ``aerial-drake analyze``.
+"""Command line: ``aerial-drake run SCENARIO``, ``plot RUN_DIR ...``, ``scenarios [show NAME]``,
+``compare SCENARIO``, ``info`` and ``analyze``.
 
 ``SCENARIO`` is a shipped scenario name (``nominal``) or a path to a YAML file.
 """
@@ -14,6 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from aerial_drake.studies.reporting import report_error
+
+# (The standard library only: importing it starts and compiles nothing.)
+from aerial_drake.viz.live import WAIT_TIMEOUT_S
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
@@ -40,27 +43,59 @@ def _cmd_info(args: argparse.Namespace) -> int:
     return 0
 
 
+def _table(header: list[str], rows: list[list[str]]) -> str:
+    """Columns right-aligned under ``header`` (the first column left-aligned)."""
+    widths = [max(len(r[k]) for r in [header, *rows]) for k in range(len(header))]
+    lines = ["  ".join(c.ljust(w) if k == 0 else c.rjust(w)
+                       for k, (c, w) in enumerate(zip(row, widths))).rstrip()
+             for row in [header, *rows]]
+    return "\n".join(lines)
+
+
+def format_summary(m: dict) -> str:
+    """One run's metrics as text: the run, the largest errors per phase, the assumptions'
+    margins and the saturated time per input, as tables at meaningful precision."""
+    lines = [f"scenario '{m['scenario']}': simulated {m['simulated_time_s']:.2f} s in "
+             f"{m['wall_time_s']:.2f} s wall (real-time factor {m['real_time_factor']:.1f}x)"]
+    rows = [[f"{p['start_s']:g}-{p['end_s']:g}",
+             f"{1e3 * p['ee_position_error_m']['max']:.3f}",
+             f"{1e3 * p['ee_orientation_error_rad']['max']:.3f}",
+             f"{1e3 * p['com_position_error_m']['max']:.3f}",
+             f"{1e3 * p['base_attitude_error_rad']['max']:.3f}"]
+            for p in m["phases"] if p["samples"] > 0]
+    lines.append(_table(["phase (s)", "EE pos max (mm)", "EE rot max (mrad)", "CoM max (mm)",
+                         "base att max (mrad)"], rows))
+    lines.append(f"min sigma_min(J_3) = {m['min_sigma_min_J3']:.4f} (Assumption 1: > 0); "
+                 f"min |f_d| = {m['min_f_d_norm_N']:.1f} N (Assumption 2: > 0)")
+    late = next((k for k in m if k.startswith("saturated_s_after")), None)
+    sat = [k for k, v in m["saturated_s_total"].items() if v > 0]
+    if not sat:
+        lines.append("saturated time: none (no input reached a limit)")
+    else:
+        after = late.removeprefix("saturated_s_after_") if late else ""
+        header = ["input at a limit", "whole run (s)"] + ([f"after {after} (s)"] if late else [])
+        lines.append(_table(header, [
+            [k, f"{m['saturated_s_total'][k]:.3f}"] + ([f"{m[late][k]:.3f}"] if late else [])
+            for k in sat]))
+    return "\n".join(lines)
+
+
 def _print_summary(result) -> None:
-    m = result.metrics
-    print(f"scenario '{m['scenario']}': simulated {m['simulated_time_s']:.2f} s in "
-          f"{m['wall_time_s']:.2f} s wall (real-time factor {m['real_time_factor']:.1f}x)")
-    header = f"{'phase (s)':>14} {'EE pos max (mm)':>16} {'EE rot max (mrad)':>18} " \
-             f"{'CoM max (mm)':>13} {'base att max (mrad)':>20}"
-    print(header)
-    for p in m["phases"]:
-        if p["samples"] == 0:
-            continue
-        print(f"{p['start_s']:6.1f}-{p['end_s']:<6.1f} "
-              f"{1e3 * p['ee_position_error_m']['max']:16.3f} "
-              f"{1e3 * p['ee_orientation_error_rad']['max']:18.3f} "
-              f"{1e3 * p['com_position_error_m']['max']:13.3f} "
-              f"{1e3 * p['base_attitude_error_rad']['max']:20.3f}")
-    print(f"min sigma_min(J3) = {m['min_sigma_min_J3']:.4f}, min |f_d| = "
-          f"{m['min_f_d_norm_N']:.1f} N")
-    sat = {k: v for k, v in m["saturated_s_total"].items() if v > 0}
-    print(f"saturated time (s): {sat if sat else 'none'}")
+    print(format_summary(result.metrics))
     if result.out_dir is not None:
         print(f"wrote {result.out_dir / 'log.npz'} and {result.out_dir / 'metrics.json'}")
+
+
+def _write_run_figures(out: Path, args: argparse.Namespace) -> None:
+    """The run's own Figs. 3-6 into its folder (after the metrics are written: they are
+    drawn from the files, so they cannot change them). Matplotlib is imported only here."""
+    if args.no_plots or not (out / "log.npz").is_file():
+        return
+    from aerial_drake.viz.run_plots import write_run_figures
+    written = write_run_figures(out)
+    # stderr: with --json, stdout holds the metrics alone.
+    print(f"wrote {len(written)} figures ({', '.join(p.name for p in written)}) in {out}",
+          file=sys.stderr)
 
 
 # Set in the restarted process, so that it never restarts again.
@@ -137,6 +172,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
         overrides = check_options(args)
     except ScenarioError as err:
         return report_error(args, 2, err)
+    if (args.no_wait or args.hold or args.wait_timeout != WAIT_TIMEOUT_S) and not args.meshcat:
+        return report_error(args, 2, "--no-wait, --wait-timeout and --hold are for the live "
+                            "view; add --meshcat")
     # Both of Section IV's runs and Figs. 3-6 (aerial_drake.studies.paper).
     if args.scenario == "paper":
         if args.meshcat or args.record or args.realtime_rate is not None:
@@ -163,11 +201,20 @@ def _cmd_run(args: argparse.Namespace) -> int:
             port = args.meshcat_port
             if port is None and not args.meshcat:
                 port = 0  # recording only: leave 7000-7099 to live views
-            view = MeshcatView(scenario, live=args.meshcat, host=args.meshcat_host, port=port)
+            from aerial_drake.viz.live import quiet_drake_info
+            with quiet_drake_info():  # Drake's own "listening at URL": printed once, below
+                view = MeshcatView(scenario, live=args.meshcat, host=args.meshcat_host,
+                                   port=port)
         except (MeshcatPortInUse, ValueError) as err:
             return report_error(args, 2, err)
         if args.meshcat:
-            print(f"Meshcat: open {view.url} in a browser")
+            print(f"Meshcat: open {view.url} in a browser", flush=True)
+    before_start = None
+    if view is not None and args.meshcat and not args.no_wait:
+        from aerial_drake.viz.live import wait_for_browser
+
+        def before_start():
+            wait_for_browser(view.meshcat, timeout=args.wait_timeout, stream=sys.stderr)
     realtime = args.realtime_rate
     if realtime is None and args.meshcat:
         realtime = 1.0
@@ -175,7 +222,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     try:
         result = run_scenario(scenario, out_dir=out, progress=not args.quiet,
                               configure=view.configure if view else None,
-                              realtime_rate=realtime)
+                              realtime_rate=realtime, before_start=before_start)
     except (ScenarioError, UnreachablePose) as err:  # found before the simulation starts
         return report_error(args, 2, err)
     except ResultsNotWritten as err:
@@ -186,6 +233,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         return report_error(args, err.exit_status, err,
                             f"logs up to the interruption are in {out}")
     except SimulationFailed as err:
+        _write_run_figures(out, args)  # the figures of the log up to the failure
         return report_error(args, 1, err, f"logs up to the failure are in {out}")
     except Interrupted as err:  # before the simulation started (building the model)
         return report_error(args, err.exit_status, f"interrupted ({err}) before the "
@@ -194,9 +242,58 @@ def _cmd_run(args: argparse.Namespace) -> int:
         if view is not None:
             print(f"wrote {view.finish(out)}", file=sys.stderr)
     _print_summary(result)
+    _write_run_figures(out, args)
     if args.json:
         from aerial_drake.simulation.outputs import strict_json
         print(strict_json(result.metrics))
+    if view is not None and args.meshcat and args.hold:
+        from aerial_drake.viz.live import hold
+        hold(view.meshcat, stream=sys.stderr)
+    return 0
+
+
+def _cmd_plot(args: argparse.Namespace) -> int:
+    from aerial_drake.viz.run_plots import write_overlay
+    try:
+        written = write_overlay(args.run_dirs, args.out, formats=tuple(args.formats))
+    except (FileNotFoundError, ValueError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    for path in written:
+        print(f"wrote {path}")
+    return 0
+
+
+def _first_line(text: str) -> str:
+    """The first sentence of a description, on one line."""
+    flat = " ".join(text.split())
+    end = flat.find(": ")
+    return flat if end < 0 else flat[:end]
+
+
+def _cmd_scenarios(args: argparse.Namespace) -> int:
+    from aerial_drake.simulation.scenarios import ScenarioError, load_scenario, shipped_scenarios
+    shipped = shipped_scenarios()
+    if args.action is None:
+        width = max(len(n) for n in shipped)
+        for name in shipped:
+            sc = load_scenario(name)
+            print(f"{name:<{width}}  {_first_line(sc.description)} ({sc.plant_variant} plant, "
+                  f"{sc.duration:g} s, {len(sc.disturbances)} disturbance windows)")
+        print("\n'aerial-drake scenarios show NAME > my.yaml' prints one to edit; "
+              "'aerial-drake run my.yaml' runs it.")
+        return 0
+    if args.name not in shipped:
+        print(f"error: no shipped scenario '{args.name}'. Valid names are: {sorted(shipped)}",
+              file=sys.stderr)
+        return 2
+    try:
+        load_scenario(args.name)  # the shipped file as shipped: it loads
+    except ScenarioError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    # The file itself, comments (units, sources) included: ready to save and edit.
+    sys.stdout.write(shipped[args.name].read_text())
     return 0
 
 
@@ -209,6 +306,15 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 def _cmd_analyze(args: argparse.Namespace) -> int:
     from aerial_drake.analysis import cli_analyze
     return cli_analyze(args)
+
+
+class _Defaults(argparse.ArgumentDefaultsHelpFormatter):
+    """Shows each option's default, except for flags (False) and options without one."""
+
+    def _get_help_string(self, action):
+        if action.default is None or action.default is False or "(default" in (action.help or ""):
+            return action.help
+        return super()._get_help_string(action)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -247,6 +353,17 @@ def build_parser() -> argparse.ArgumentParser:
                      help="perturb the initial offsets by a reproducible uniform draw from "
                           "numpy.random.default_rng(SEED) (bounds: aerial_drake.studies.paper."
                           "SEED_BOUNDS); without it runs are deterministic")
+    run.add_argument("--no-plots", action="store_true",
+                     help="do not draw the run's Figs. 3-6 (PNG in the run's folder)")
+    run.add_argument("--no-wait", action="store_true",
+                     help="with --meshcat: start the simulation at once, without waiting for a "
+                          "browser to open the page")
+    run.add_argument("--wait-timeout", type=float, default=WAIT_TIMEOUT_S,
+                     help="with --meshcat: seconds to wait for a browser before starting "
+                          f"anyway (default: {WAIT_TIMEOUT_S:g})")
+    run.add_argument("--hold", action="store_true",
+                     help="with --meshcat: keep serving the finished run (its replay under "
+                          "Open Controls > Animations) until Ctrl-C")
     run.set_defaults(func=_cmd_run)
     compare = sub.add_parser(
         "compare", parents=[common], help="run a scenario with several controllers; overlay "
@@ -267,18 +384,49 @@ def build_parser() -> argparse.ArgumentParser:
                               "NAME_undisturbed): the reference for how far a disturbance "
                               "moves the end effector (tools/compare_displacement.py)")
     compare.set_defaults(func=_cmd_compare)
+    plot = sub.add_parser(
+        "plot", parents=[common], help="overlay runs: Figs. 3-5 of all, Fig. 6 of each",
+        description="Draw Figs. 3-5 with every run overlaid (labelled by run name, each run's "
+                    "reference dashed with its own legend entry) and Fig. 6 of each run, from "
+                    "run folders written by 'aerial-drake run'.",
+        formatter_class=_Defaults)
+    plot.add_argument("run_dirs", nargs="+", metavar="RUN_DIR",
+                      help="run folders (log.npz, metrics.json, scenario.yaml), e.g. out/nominal")
+    plot.add_argument("--out", default="out/plots", help="where to write the figures")
+    plot.add_argument("--formats", nargs="+", default=["png"], choices=["png", "pdf", "svg"],
+                      help="file formats")
+    plot.set_defaults(func=_cmd_plot)
+    scenarios = sub.add_parser(
+        "scenarios", parents=[common],
+        help="list the shipped scenarios, or print one as YAML to edit",
+        description="Without arguments: the shipped scenarios and what each is. 'show NAME': "
+                    "the scenario's YAML file, comments included (save it, edit it, run it "
+                    "with 'aerial-drake run FILE.yaml').")
+    scenarios.add_argument("action", nargs="?", choices=["show"], default=None,
+                           help="'show' prints the scenario NAME")
+    scenarios.add_argument("name", nargs="?", default=None, help="a shipped scenario's name")
+    scenarios.set_defaults(func=_cmd_scenarios)
     info = sub.add_parser("info", parents=[common],
                           help="print a summary of the models and scenarios")
     info.set_defaults(func=_cmd_info)
     analyze = sub.add_parser(
         "analyze", parents=[common], help="equilibria, linearisation, eigenvalues, "
-        "controllability, Lyapunov function and region of attraction; writes analysis.json "
-        "and plots (docs/analysis.md)")
+        "controllability, Lyapunov function and region of attraction; writes analysis.json and "
+        "plots (docs/analysis.md)",
+        description="Stability analysis of a scenario's controller (docs/analysis.md): hover "
+        "equilibria, Drake's Linearize of the closed loop and its eigenvalues against the "
+        "predicted ones, controllability of the open loop, Lee et al.'s sufficient conditions "
+        "on the Lyapunov constants, the Lyapunov function along a run and a sampled region of "
+        "attraction. Writes analysis.json, eigenvalues.png, lyapunov.png and "
+        "region_of_attraction.png to OUT and prints a report that explains each verdict.",
+        formatter_class=_Defaults)
     analyze.add_argument("--out", default="out/analysis", help="output folder")
     analyze.add_argument("--scenario", default="nominal", help="scenario whose gains and "
-                         "trajectory are analysed (default: nominal)")
-    analyze.add_argument("--fast", action="store_true", help="short runs (a smoke test)")
-    analyze.add_argument("--seed", type=int, default=0, help="region-of-attraction draws")
+                         "trajectory are analysed")
+    analyze.add_argument("--fast", action="store_true", help="short runs and few samples (a "
+                         "smoke test, not a result)")
+    analyze.add_argument("--seed", type=int, default=0, help="seed of the region-of-attraction "
+                         "draws")
     analyze.add_argument("--quiet", action="store_true", help="no progress lines")
     analyze.set_defaults(func=_cmd_analyze)
     return parser

@@ -4,7 +4,7 @@ test_oracle_pinocchio.py and test_oracle_closed_loop.py.
 Nothing here calls aerial_drake's decoupling, control or compiled code: the quantities come from
 Drake's MultibodyPlant (mass matrix, Jacobians, centre of mass) and from Pinocchio, combined by
 formulas written out here from the paper (equation numbers in parentheses) and the design
-notes' conventions (design note 1: Drake's v = [w_WB (World), v_WBo (World), q_arm_dot]).
+conventions of docs/control.md (Coordinates: Drake's v = [w_WB (World), v_WBo (World), q_arm_dot]).
 
 - :func:`christoffel_coriolis`: the Christoffel Coriolis matrix from finite differences of
   Drake's mass matrix in holonomic coordinates (an roll-pitch-yaw base, whose q_dot are true
@@ -254,7 +254,7 @@ class PinocchioModel:
 
 # --- Section II from plain matrices (the paper's formulas, written here) ----------------------
 def decoupling_transform(M: np.ndarray, J_g: np.ndarray, R: np.ndarray) -> dict:
-    """(3)-(4) with the design notes' null-space base: J_bw = [R^T 0 0],
+    """(3)-(4) with the null-space base of aerial_drake.dynamics.decoupling: J_bw = [R^T 0 0],
     Z = [0, -A_q^T, E_n] (A_q = J_g's joint columns), N = (Z M Z^T)^-1 Z M, T = [J_g; J_bw; N],
     Lambda = T^-T M T^-1."""
     nv = M.shape[0]

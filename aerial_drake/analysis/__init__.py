@@ -5,7 +5,7 @@
 - :func:`linearize_closed_loop`: Drake's ``Linearize`` of the continuous closed loop (no
   sampling, lag or saturation) at that equilibrium, on an ``RpyFloatingJoint`` base, with the
   controller converted to AutoDiffXd (``DecoupledController_[AutoDiffXd]``); its eigenvalues
-  beside the ones design note 6 predicts (:func:`predicted_eigenvalues`).
+  beside the predicted ones (docs/analysis.md, section 3) (:func:`predicted_eigenvalues`).
 - :func:`linearize_open_loop` and :func:`controllability`: the plant alone at hover with the
   inputs ``[f, mu, tau]``, Drake's ``IsControllable`` / ``IsStabilizable``, and where the
   rank of the input matrix falls short (underactuation).

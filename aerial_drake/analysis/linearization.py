@@ -1,7 +1,7 @@
 """The closed loop at hover linearised: Drake's ``Linearize`` of the continuous closed loop (no
 sampling, lag or saturation) at an equilibrium, on an ``RpyFloatingJoint`` base, with the
 controller converted to AutoDiffXd (``DecoupledController_[AutoDiffXd]``); its eigenvalues
-beside the ones design note 6 predicts (:func:`predicted_eigenvalues`)."""
+beside the predicted ones (docs/analysis.md, section 3) (:func:`predicted_eigenvalues`)."""
 
 from __future__ import annotations
 
@@ -76,7 +76,8 @@ def build_hover_loop(eq: HoverEquilibrium, gains: Gains) -> HoverLoop:
 
 @dataclass
 class ClosedLoopLinearization:
-    """``Linearize`` of the hover loop, and its eigenvalues beside design note 6's."""
+    """``Linearize`` of the hover loop, and its eigenvalues beside the predicted ones
+    (docs/analysis.md, section 3)."""
 
     equilibrium: HoverEquilibrium
     A: np.ndarray  # (2 (6 + n)) square, state [q (rpy base); v]
@@ -102,7 +103,8 @@ class ClosedLoopLinearization:
 
 
 def predicted_eigenvalues(m: float, gains: Gains, Lambda_z: np.ndarray) -> list[dict]:
-    """Design note 6: the closed loop's 2 (6 + n) eigenvalues at a hover, each with its origin.
+    """The closed loop's 2 (6 + n) eigenvalues at a hover, each with its origin, as predicted
+    in docs/analysis.md, section 3.
 
     - CoM, each axis i: ``m s^2 + D_x[i] s + K_x[i] = 0``;
     - attitude, each body axis i: ``Lbar2[i] s^2 + k_w s + k_R = 0``;
@@ -142,7 +144,7 @@ def compare_eigenvalues(computed: np.ndarray, predicted: list[dict]) -> tuple[li
         c = remaining.pop(k)
         rows.append({**_row(p, c), "relative_mismatch": abs(c - p["value"]) / abs(p["value"])})
     for c in remaining:
-        rows.append({"group": "unpredicted", "label": "not in design note 6",
+        rows.append({"group": "unpredicted", "label": "not predicted",
                      "predicted": None, "computed": [c.real, c.imag],
                      "relative_mismatch": math.inf})
     worst = max(r["relative_mismatch"] for r in rows) if rows else math.inf

@@ -129,42 +129,91 @@ def format_eigenvalue_table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def format_open_loop(ol: dict) -> list[str]:
+    """The open loop's controllability verdict, worded so it reads right without the docs."""
+    scaled, raw = ol["IsControllable_time_scaled"], ol["IsControllable"]
+    pbh = ol.get("pbh_max_rank_deficiency", 0)
+    verdict = ("controllable" if scaled and pbh == 0 else
+               "NOT controllable" if not scaled and pbh > 0 else "undecided (tests disagree)")
+    lines = [f"open loop (the plant alone, linearised at hover): {verdict}; "
+             f"{'stabilisable' if ol['IsStabilizable'] else 'NOT stabilisable'} "
+             "(what the controller needs)"]
+    lines.append(f"  evidence: PBH rank deficiency {pbh} at every eigenvalue; rank of "
+                 f"[B, AB, ..., A^k B] for k = 0, 1, ...: {ol['controllability_rank_growth']} "
+                 f"(full: {ol['states']}); rank B = {ol['rank_B']} of {ol['states'] // 2} "
+                 "velocities (underactuated: thrust acts along the body z only)")
+    if not raw and scaled and ol["controllability_matrix_conditioning"] < 1e-14:
+        lines.append(f"  Drake's IsControllable(A, B) says {raw} only because Kalman's matrix "
+                     f"is numerically singular (sigma_min/sigma_max "
+                     f"{ol['controllability_matrix_conditioning']:.1e}, below double "
+                     "precision): its columns grow like |A|^k. The time-scaled system "
+                     "(A, B)/|A| has the same controllability and a well-conditioned matrix "
+                     f"(ratio {ol.get('time_scaled_conditioning', float('nan')):.1e}); on it "
+                     f"IsControllable says {scaled}.")
+    else:
+        lines.append(f"  Drake's IsControllable: {raw} on (A, B), {scaled} on the time-scaled "
+                     f"(A, B)/|A| (Kalman matrix sigma_min/sigma_max "
+                     f"{ol['controllability_matrix_conditioning']:.1e})")
+    return lines
+
+
+def format_lee(lee: dict) -> list[str]:
+    """Lee et al.'s conditions: sufficient for the Lyapunov decrease, so one not met is no
+    verdict on stability."""
+
+    def state(ok: bool) -> str:
+        return "met" if ok else "NOT met"
+
+    lines = ["Lee et al.'s conditions on the Lyapunov constants gamma1, gamma2 (sufficient, not "
+             "necessary: one not met proves nothing about stability, it only leaves the proof "
+             "to the paper's local argument; the Lyapunov and region-of-attraction runs below "
+             "test it):",
+             f"  CoM: gamma1 = {lee['gamma1']:g} < {min(lee['gamma1_bounds'].values()):.3g}: "
+             f"{state(lee['gamma1_ok'])}",
+             f"  attitude: gamma2 = {lee['gamma2']:g} < "
+             f"{min(lee['gamma2_bounds'].values()):.3g}: {state(lee['gamma2_ok'])} (one axis "
+             f"at a time, < {min(lee['gamma2_per_axis_bounds']):.3g}: "
+             f"{state(lee['gamma2_per_axis_ok'])})"]
+    coupling = f"  coupling between CoM and attitude: {state(lee['coupling_ok'])}"
+    if not lee["coupling_ok"]:
+        possible = lee.get("coupling_possible_for_some_gammas")
+        coupling += ("; no gamma1, gamma2 could meet it with these gains, so this is a limit "
+                     "of the sufficient condition, not a sign of instability"
+                     if possible is not None and not possible
+                     else "; other gamma1, gamma2 may meet it")
+    lines.append(coupling)
+    return lines
+
+
 def format_report(report: dict) -> str:
     """The terminal summary of :func:`analyze`'s result."""
     lines = []
     for name, e in report["equilibria"].items():
         cl, ol = e["closed_loop"], e["open_loop"]
         eq = cl["equilibrium"]
-        lines.append(f"hover '{name}': CoM {eq['p_WG_m']} m, yaw {eq['yaw_rad']:g} rad, end "
-                     f"effector {np.round(eq['p_WE_m'], 3).tolist()} m, q3 {eq['q3_rad']:g}; "
+        lines.append(f"hover '{name}': CoM {(np.round(eq['p_WG_m'], 3) + 0.0).tolist()} m, yaw "
+                     f"{eq['yaw_rad']:g} rad, end effector "
+                     f"{(np.round(eq['p_WE_m'], 3) + 0.0).tolist()} m, q3 {eq['q3_rad']:g}; "
                      f"thrust {eq['thrust_N']:.1f} N")
         lines.append(f"  closed loop: {cl['states']} states, |x_dot| at equilibrium "
                      f"{cl['derivative_residual']:.1e}, max relative eigenvalue mismatch "
                      f"{cl['max_relative_mismatch']:.1e}")
         lines += ["  " + line for line in format_eigenvalue_table(cl["eigenvalues"]).split("\n")]
-        lines.append(f"  open loop: IsStabilizable {ol['IsStabilizable']}, IsControllable "
-                     f"{ol['IsControllable']} (Kalman matrix sigma ratio "
-                     f"{ol['controllability_matrix_conditioning']:.1e}), time-scaled "
-                     f"{ol['IsControllable_time_scaled']}; rank B {ol['rank_B']} of "
-                     f"{ol['states'] // 2} velocities; rank [B .. A^k B]: "
-                     f"{ol['controllability_rank_growth']}")
-    lee = report["lee_conditions"]
-    lines.append(f"Lee et al.: gamma1 = {lee['gamma1']:g} < "
-                 f"{min(lee['gamma1_bounds'].values()):.3g}"
-                 f" {'ok' if lee['gamma1_ok'] else 'VIOLATED'}; gamma2 = {lee['gamma2']:g} < "
-                 f"{min(lee['gamma2_bounds'].values()):.3g} "
-                 f"{'ok' if lee['gamma2_ok'] else 'VIOLATED'} (per axis < "
-                 f"{min(lee['gamma2_per_axis_bounds']):.3g}: "
-                 f"{'ok' if lee['gamma2_per_axis_ok'] else 'VIOLATED'}); coupling condition "
-                 f"{'ok' if lee['coupling_ok'] else 'not met'}")
+        lines += ["  " + line for line in format_open_loop(ol)]
+    lines += format_lee(report["lee_conditions"])
     ly = report["lyapunov"]
     lines.append(f"Lyapunov ({ly['duration_s']:g} s, {ly['integrator']['scheme']} accuracy "
                  f"{ly['integrator']['accuracy']:g}): V {ly['V']['initial']:.4g} -> "
-                 f"{ly['V']['final']:.4g}, max increase {ly['V']['max_increase']:.2e}; V_task max "
-                 f"increase {ly['V_task']['max_increase']:.2e}")
+                 f"{ly['V']['final']:.4g}, largest increase between samples "
+                 f"{ly['V']['max_increase']:.2e}; V_task's {ly['V_task']['max_increase']:.2e} ("
+                 + ("V never increased along the run"
+                    if ly['V']['max_increase'] <= 0 else "V increased somewhere: see lyapunov.png")
+                 + ")")
     roa = report["region_of_attraction"]
-    lines.append("region of attraction (" + roa["criterion"] + "): " + ", ".join(
-        f"s = {s:g}: {f:.2f}" for s, f in zip(roa["scales"], roa["converged_fraction"])))
+    lines.append("region of attraction: fraction of sampled starts that converged ("
+                 + roa["criterion"] + "), per size s of the initial offsets: " + ", ".join(
+                     f"s = {s:g}: {f:.2f}"
+                     for s, f in zip(roa["scales"], roa["converged_fraction"])))
     return "\n".join(lines)
 
 

@@ -2,8 +2,8 @@
 
 ``DecoupledController`` is the double instantiation of the scalar-convertible template
 ``DecoupledController_`` (Drake's ``TemplateSystem``): ``DecoupledController_[AutoDiffXd]`` runs
-the same law on an AutoDiffXd copy of the model plant, so a diagram holding the controller can
-be ``Linearize``d (see :mod:`aerial_drake.analysis`).
+the same law on an AutoDiffXd copy of the model plant, so Drake's ``Linearize`` applies to a
+diagram holding the controller (see :mod:`aerial_drake.analysis`).
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """The inertially decoupled dynamics of Section II, in Drake's velocity coordinates.
 
 Drake's velocities for a free base are ``v = [w_WB (World), v_WBo (World), qdot_arm]`` (angular
-first). Every matrix of the paper is expressed in that ``v`` (design notes, section 1):
+first). Every matrix of the paper is expressed in that ``v`` (docs/control.md, Coordinates):
 
 - ``M v_dot + C v + g = J_b^T B psi + Q^T tau``                           (1)
 - ``xi = [x_g_dot; w_b; rho] = T v``, ``T = [J_g; J_bw; N]``               (3)
@@ -10,7 +10,7 @@ first). Every matrix of the paper is expressed in that ``v`` (design notes, sect
 - input map ``T^{-T} [J_b^T Q^T]``                                        (7)
 
 ``C`` is the Christoffel-consistent Coriolis matrix, assembled per body from spatial quantities
-(Echeandia & Wensing 2021; design notes, section 3). With it, ``Gamma``'s first three rows and
+(Echeandia & Wensing 2021; docs/control.md, Coordinates). With it, ``Gamma``'s first three rows and
 columns vanish, so the CoM dynamics (5a) has no velocity term.
 
 Use :class:`DecoupledDynamics` (built once per plant) and call :meth:`DecoupledDynamics.compute`
@@ -265,7 +265,7 @@ class DecoupledDynamics:
         V = J @ v  # (nb, 6) body spatial velocities
         J_dot = self._jacobian_derivatives(J, V, v, R_all)
 
-        # Christoffel-consistent Coriolis matrix (design notes, section 3).
+        # Christoffel-consistent Coriolis matrix (docs/control.md, Coordinates).
         I = self._I
         crmV = _crm_batch(V)
         crfV = -np.swapaxes(crmV, 1, 2)
@@ -298,7 +298,7 @@ class DecoupledDynamics:
         J_b[:3, 3:6] = RT
         J_b[3:, :3] = RT
 
-        # Closed-form null-space base: Z = [0, -A_q^T, E_n] (design notes, section 2).
+        # Closed-form null-space base: Z = [0, -A_q^T, E_n] (the paper's (3)-(4), Section II).
         A_q, A_q_dot = J_g[:, 6:], J_g_dot[:, 6:]
         Z = np.zeros((n, nv), dtype=dtype)
         Z[:, 3:6] = -A_q.T
@@ -329,7 +329,7 @@ class DecoupledDynamics:
 
     def _jacobian_derivatives(self, J: np.ndarray, V: np.ndarray, v: np.ndarray,
                               R_all: np.ndarray) -> np.ndarray:
-        """d/dt of each body-frame Jacobian, in closed form (design notes, section 3)."""
+        """d/dt of each body-frame Jacobian, in closed form (docs/control.md, Coordinates)."""
         # 1-DoF joint column k: crm(J[:, k]) sum_{m > k} J[:, m] v_m (parent-before-child order).
         J_dot = np.empty_like(J)
         # Only the joints' columns (6:): the free joint's are set below.

@@ -306,7 +306,8 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
                  configure: Callable | None = None,
                  realtime_rate: float | None = None,
                  zero_controller: bool = False,
-                 controller_factory: ControllerFactory | None = None) -> RunResult:
+                 controller_factory: ControllerFactory | None = None,
+                 before_start: Callable[[], None] | None = None) -> RunResult:
     """Simulate ``scenario``; write ``log.npz``, ``scenario.yaml`` and ``metrics.json`` (last)
     to the folder ``out_dir`` if given (docs/reliability.md).
 
@@ -320,6 +321,9 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     :class:`SimulationInterrupted`; one arriving while the files are written is held until
     they are complete. ``controller_factory`` (``factory(scenario, model) -> system``,
     :mod:`aerial_drake.simulation.controllers`) overrides the scenario's ``controller.type``.
+    ``before_start()`` is called once everything is built and the initial state set, just
+    before the simulation (and its wall clock) starts: e.g. to wait for a browser to open the
+    live view.
     """
     if not isinstance(scenario, Scenario):
         raise ScenarioError(f"scenario: expected a Scenario, got {type(scenario).__name__} "
@@ -335,7 +339,7 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     try:
         with handling():
             return _run_locked(scenario, lock, progress, stream, configure, realtime_rate,
-                               zero_controller, controller_factory)
+                               zero_controller, controller_factory, before_start)
     finally:
         if lock is not None:
             lock.release()
@@ -344,7 +348,8 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
 def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
                 stream: TextIO | None, configure: Callable | None,
                 realtime_rate: float | None, zero_controller: bool,
-                controller_factory: ControllerFactory | None) -> RunResult:
+                controller_factory: ControllerFactory | None,
+                before_start: Callable[[], None] | None) -> RunResult:
     stream = stream if stream is not None else sys.stderr
     if lock is not None:
         _note_replaced_results(scenario, lock.folder, stream)
@@ -362,6 +367,8 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
     context = simulator.get_mutable_context()
     plant_context = loop.simulated_plant.plant.GetMyMutableContextFromRoot(context)
     set_initial_state(scenario, loop, plant_context)
+    if before_start is not None:
+        before_start()
     progress_lines = _Progress(scenario.duration, stream if progress else None)
     failure, interrupted, wall = _simulate(
         simulator, loop, pause_times(scenario.duration, scenario.log_period), progress_lines)

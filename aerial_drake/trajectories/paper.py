@@ -1,6 +1,6 @@
 """The paper's reference trajectory (Section IV-A, eqs (27)-(33)): pure math and a Drake system.
 
-The end-effector task (27) is y_d = [x_ed; R_ed; q3d], with
+The end-effector task (27) is y_d = [x_ed; R_ed; q3d], with::
 
     x_ed(t) = center + A_b basic(t) + A_a agile(t)                                   (28)
         basic(t) = [-sin(w_b t), -cos(w_b t), sin(w_b t) + c t]

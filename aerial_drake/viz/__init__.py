@@ -1,2 +1,3 @@
-"""Pictures: the paper's figures (:mod:`.plots`, matplotlib), the Meshcat view, overlays and
-replay (:mod:`.meshcat_view`) and headless-Chromium screenshots (:mod:`.screenshot`)."""
+"""Pictures: the paper's figures (:mod:`.plots`, matplotlib) and a run's own or several runs'
+(:mod:`.run_plots`), the Meshcat view, overlays and replay (:mod:`.meshcat_view`), catching the
+live view (:mod:`.live`) and headless-Chromium screenshots (:mod:`.screenshot`)."""

@@ -7,12 +7,13 @@ scenario as run). From a nominal and, optionally, a disturbed run this module wr
 - ``fig4_com``: centre of mass position, desired and actual, x/y/z, and the error norm;
 - ``fig5_orientation_errors``: base attitude error (top) and end-effector orientation error
   (bottom), as rotation angles;
-- ``fig6_inputs``: thrust, body torques and joint torques that reached the nominal plant, with
-  the input limits dashed;
+- ``fig6_inputs``: thrust, body torques and each joint torque that reached the nominal plant,
+  each with its own limits dashed, over the whole run and over its first 50 ms;
 
-each as ``.png`` and ``.pdf``. As in the paper: nominal black, disturbed grey, the
-disturbance on the helicopter shaded green and the one at the end effector orange (the windows
-come from the nominal run's scenario).
+each as ``.png`` and ``.pdf``. As in the paper: nominal black, disturbed grey (each labelled
+by its run's name), the disturbance on the helicopter shaded green and the one at the end
+effector orange (the windows of every run's scenario, each once). :func:`series` colours and
+labels any number of runs for Figs. 3-5 (``aerial-drake plot``, :mod:`aerial_drake.viz.run_plots`).
 
 Nothing is recomputed from the model: the actual CoM and end-effector positions are the
 reference plus the controller's logged errors (``x_tilde = x_g - x_d``,
@@ -26,6 +27,7 @@ Command line: ``python -m aerial_drake.viz.plots NOMINAL_DIR [DISTURBED_DIR] [--
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 from dataclasses import dataclass
@@ -141,15 +143,52 @@ def _shade_windows(axes, scenario: Scenario, t_end: float) -> list:
     return [h for hs in handles.values() for h in hs]
 
 
-def _runs(nominal: Run, disturbed: Run | None) -> list[tuple[Run, str, str]]:
-    runs = [(nominal, NOMINAL_COLOR, "nominal")]
-    if disturbed is not None:
-        runs.append((disturbed, DISTURBED_COLOR, "disturbed"))
-    return runs
+#: Colours of the runs in order: the paper's black and grey first, then Matplotlib's.
+RUN_COLORS = (NOMINAL_COLOR, DISTURBED_COLOR, "tab:blue", "tab:purple", "tab:olive",
+              "tab:cyan", "tab:brown")
+#: Colours of the distinct references, in order (dashed).
+DESIRED_COLORS = (DESIRED_COLOR, "tab:pink", "darkgoldenrod", "tab:gray")
+
+#: One curve set of a figure: the run, its colour and its legend label.
+Series = tuple[Run, str, str]
+
+
+def series(runs: list[Run], labels: list[str] | None = None) -> list[Series]:
+    """Colour and label each of ``runs`` (labels default to the runs' names)."""
+    labels = labels if labels is not None else [run.name for run in runs]
+    return [(run, RUN_COLORS[k % len(RUN_COLORS)], label)
+            for k, (run, label) in enumerate(zip(runs, labels))]
+
+
+def _runs(nominal: Run, disturbed: Run | None) -> list[Series]:
+    """The paper's pair, black and grey, each labelled by its run's name (the paper run's are
+    "nominal" and "disturbed"); "nominal"/"disturbed" if the two share a name."""
+    runs = [nominal] + ([disturbed] if disturbed is not None else [])
+    names = [run.name for run in runs]
+    return series(runs, None if len(set(names)) == len(names) else
+                  ["nominal", "disturbed"][:len(runs)])
+
+
+def _as_series(first, second) -> list[Series]:
+    """The figures take (nominal, disturbed) runs, or a list of :data:`Series`."""
+    return first if isinstance(first, list) else _runs(first, second)
 
 
 def _t_end(runs) -> float:
     return max(float(run.t[-1]) for run, _, _ in runs)
+
+
+def _shade_all(axes, runs: list[Series]) -> list:
+    """Shade every run's disturbance windows once (the union), see :func:`_shade_windows`."""
+    seen, windows = set(), []
+    for run, _, _ in runs:
+        for d in run.scenario.disturbances:
+            key = (d.target, d.start, d.stop)
+            if key not in seen:
+                seen.add(key)
+                windows.append(d)
+    union = dataclasses.replace(runs[0][0].scenario, disturbances=windows)
+    return _shade_windows(axes, union, _t_end(runs))
 
 
 def _legend(fig: Figure, handles: list) -> None:
@@ -159,57 +198,67 @@ def _legend(fig: Figure, handles: list) -> None:
                fontsize=9, frameon=False)
 
 
-def _run_handles(runs, desired: bool) -> list:
+def _run_handles(runs, desired: list | None = None) -> list:
+    """Legend entries: the references drawn (``desired``), then one per run."""
     handles = [Line2D([], [], color=c, linewidth=1.4, label=label) for _, c, label in runs]
-    if desired:
-        handles.insert(0, Line2D([], [], color=DESIRED_COLOR, linestyle="--", linewidth=1.2,
-                                 label="desired"))
-    return handles
+    return list(desired or []) + handles
 
 
-def _position_figure(nominal: Run, disturbed: Run | None, which: str, title: str,
-                     symbol: str) -> Figure:
-    """Figs. 3 and 4: desired and actual positions per axis, then the error norm (log)."""
-    runs = _runs(nominal, disturbed)
+def _position_figure(runs: list[Series], which: str, title: str, symbol: str) -> Figure:
+    """Figs. 3 and 4: desired and actual positions per axis, then the error norm (log).
+
+    Each distinct reference is drawn once, dashed, in its own colour; its legend entry names
+    the runs that track it ("desired" alone when every run tracks the same one)."""
     fig, axes = _new_figure(4, 9.5)
-    desired_drawn: list[np.ndarray] = []
+    references: list[tuple[np.ndarray, list[str], str]] = []  # (desired, labels, colour)
     for run, color, label in runs:
         desired, actual = getattr(run, which)()
         for i, ax in enumerate(axes[:3]):
             ax.plot(run.t, actual[:, i], color=color, linewidth=1.2)
         error = 1e3 * np.linalg.norm(actual - desired, axis=1)
         axes[3].semilogy(run.t, np.maximum(error, 1e-4), color=color, linewidth=1.0)
-        # The desired trajectory once, unless the runs track different ones.
-        if not any(len(d) == len(desired) and np.allclose(d, desired) for d in desired_drawn):
-            for i, ax in enumerate(axes[:3]):
-                ax.plot(run.t, desired[:, i], color=DESIRED_COLOR, linestyle="--",
-                        linewidth=1.0, zorder=3)
-            desired_drawn.append(desired)
+        same = next((r for r in references
+                     if len(r[0]) == len(desired) and np.allclose(r[0], desired)), None)
+        if same is not None:
+            same[1].append(label)
+            continue
+        ref_color = DESIRED_COLORS[len(references) % len(DESIRED_COLORS)]
+        for i, ax in enumerate(axes[:3]):
+            ax.plot(run.t, desired[:, i], color=ref_color, linestyle="--", linewidth=1.0,
+                    zorder=3)
+        references.append((desired, [label], ref_color))
     for i, ax in enumerate(axes[:3]):
         ax.set_ylabel(f"{symbol} {'xyz'[i]} (m)")
     axes[3].set_ylabel("|error| (mm)")
     axes[3].set_ylim(bottom=1e-3)
-    windows = _shade_windows(axes, nominal.scenario, _t_end(runs))
+    windows = _shade_all(axes, runs)
     fig.suptitle(title)
-    _legend(fig, _run_handles(runs, desired=True) + windows)
+    desired_handles = [
+        Line2D([], [], color=c, linestyle="--", linewidth=1.2,
+               label="desired" if len(references) == 1 else f"desired ({', '.join(labels)})")
+        for _, labels, c in references]
+    _legend(fig, _run_handles(runs, desired_handles) + windows)
     return fig
 
 
-def figure_end_effector(nominal: Run, disturbed: Run | None = None) -> Figure:
-    """Fig. 3: end-effector position p_E against p_ed (World)."""
-    return _position_figure(nominal, disturbed, "end_effector",
+def figure_end_effector(nominal: Run | list[Series], disturbed: Run | None = None) -> Figure:
+    """Fig. 3: end-effector position p_E against p_ed (World); ``nominal`` may be a list of
+    :data:`Series` (any runs, see :func:`series`)."""
+    return _position_figure(_as_series(nominal, disturbed), "end_effector",
                             "End-effector position (Fig. 3)", "$p_E$")
 
 
-def figure_com(nominal: Run, disturbed: Run | None = None) -> Figure:
-    """Fig. 4: centre of mass x_g against x_d (World)."""
-    return _position_figure(nominal, disturbed, "com", "Centre of mass position (Fig. 4)",
-                            "$x_g$")
+def figure_com(nominal: Run | list[Series], disturbed: Run | None = None) -> Figure:
+    """Fig. 4: centre of mass x_g against x_d (World); runs as in :func:`figure_end_effector`."""
+    return _position_figure(_as_series(nominal, disturbed), "com",
+                            "Centre of mass position (Fig. 4)", "$x_g$")
 
 
-def figure_orientation_errors(nominal: Run, disturbed: Run | None = None) -> Figure:
-    """Fig. 5: angle of R_d^T R_b (top) and of R_E R_ed^T (bottom)."""
-    runs = _runs(nominal, disturbed)
+def figure_orientation_errors(nominal: Run | list[Series],
+                              disturbed: Run | None = None) -> Figure:
+    """Fig. 5: angle of R_d^T R_b (top) and of R_E R_ed^T (bottom); runs as in
+    :func:`figure_end_effector`."""
+    runs = _as_series(nominal, disturbed)
     fig, axes = _new_figure(2, 6.0)
     for run, color, _ in runs:
         axes[0].plot(run.t, run.diagnostic("base_attitude_error")[:, 0], color=color,
@@ -220,9 +269,9 @@ def figure_orientation_errors(nominal: Run, disturbed: Run | None = None) -> Fig
     axes[1].set_ylabel("end-effector orientation error\nangle of $R_E R_{ed}^T$ (rad)")
     for ax in axes:
         ax.set_ylim(bottom=0.0)
-    windows = _shade_windows(axes, nominal.scenario, _t_end(runs))
+    windows = _shade_all(axes, runs)
     fig.suptitle("Orientation errors (Fig. 5)")
-    _legend(fig, _run_handles(runs, desired=False) + windows)
+    _legend(fig, _run_handles(runs) + windows)
     return fig
 
 
@@ -235,48 +284,62 @@ def _draw_limit(ax, value, color="0.35", text=None) -> None:
                     textcoords="offset points", va="center", fontsize=8, color=color)
 
 
+#: Fig. 6's rows: the inputs drawn on each (names of :data:`INPUT_NAMES`).
+INPUT_ROWS = (("thrust",), ("mu_x", "mu_y", "mu_z")) + tuple((f"tau_{j}",) for j in range(1, 8))
+#: Fig. 6's right column: the first ZOOM_S seconds, where the start saturates some inputs.
+ZOOM_S = 0.05
+_ROW_LABELS = {"thrust": "$f$ (N)", "mu_x": "$\\mu$ (N m)"}
+_MU_COLORS = ("tab:blue", "tab:orange", "tab:green")
+
+
+def _input_limit_lines(ax, names: tuple[str, ...], colors: list[str], limits: dict,
+                       annotate: bool) -> None:
+    """Dashed lines at the limits of the inputs ``names`` drawn on ``ax``: once in grey when
+    they share their limits, else each in its input's colour."""
+    pairs = [limits.get(n, (None, None)) for n in names]
+    shared = all(p == pairs[0] for p in pairs)
+    for k, (lower, upper) in enumerate(pairs[:1] if shared else pairs):
+        color = "0.35" if shared else colors[k]
+        for bound in (lower, upper):
+            text = f"{bound:g}" if annotate and bound is not None else None
+            _draw_limit(ax, bound, color=color, text=text)
+
+
 def figure_inputs(run: Run) -> Figure:
     """Fig. 6: the inputs that reached the plant (after saturation, and lag if any) of one
-    run, with the limits dashed."""
+    run, each with its own limits dashed: thrust, the three body torques (one panel), then
+    each joint torque on its own panel. Left the whole run, right its first
+    :data:`ZOOM_S` s (the start saturates some inputs for a few milliseconds)."""
     u = run.log["applied_command"]
     t = run.t
     limits = run.input_limits()
-    names = list(INPUT_NAMES)
-    fig, axes = _new_figure(3, 9.5)
-    axes[0].plot(t, u[:, 0], color=NOMINAL_COLOR, linewidth=1.1, label="thrust $f$")
-    for bound in limits.get("thrust", (None, None)):
-        _draw_limit(axes[0], bound, text=None if bound is None else f"{bound:g}")
-    axes[0].set_ylabel("thrust $f$ (N)")
-    mu_colors = ("tab:blue", "tab:orange", "tab:green")
-    for i, axis in enumerate("xyz"):
-        axes[1].plot(t, u[:, 1 + i], color=mu_colors[i], linewidth=1.0,
-                     label=f"$\\mu_{axis}$")
-    bounds = {b for k in ("mu_x", "mu_y", "mu_z") for b in limits.get(k, (None, None))}
-    for bound in sorted(b for b in bounds if b is not None):
-        _draw_limit(axes[1], bound, text=f"{bound:g}")
-    axes[1].set_ylabel("body torques $\\mu$ (N m)")
-    n_joint = u.shape[1] - 4
-    for j in range(n_joint):
-        axes[2].plot(t, u[:, 4 + j], color=JOINT_COLORS[j % len(JOINT_COLORS)],
-                     linewidth=0.9, label=f"$\\tau_{j + 1}$")
-    # One dashed pair per distinct joint limit, annotated with the joints it bounds.
-    by_limit: dict[float, list[int]] = {}
-    for j in range(n_joint):
-        lo, hi = limits.get(names[4 + j], (None, None))
-        if hi is not None:
-            by_limit.setdefault(hi, []).append(j + 1)
-            if lo is not None and lo != -hi:
-                by_limit.setdefault(lo, []).append(j + 1)
-    for value, joints in sorted(by_limit.items()):
-        label = "q" + ",".join(str(j) for j in joints)
-        _draw_limit(axes[2], value, text=f"$\\pm${value:g} ({label})")
-        _draw_limit(axes[2], -value)
-    axes[2].set_ylabel("joint torques $\\tau$ (N m)")
-    for ax in axes:
-        ax.legend(loc="upper right", fontsize=8, ncol=7 if ax is axes[2] else 3,
-                  framealpha=0.85)
-    windows = _shade_windows(axes, run.scenario, float(t[-1]))
-    fig.suptitle(f"Inputs of the {run.name} case, as applied; limits dashed (Fig. 6)")
+    index = {name: k for k, name in enumerate(INPUT_NAMES)}
+    rows = [r for r in INPUT_ROWS if all(index[n] < u.shape[1] for n in r)]
+    fig = Figure(figsize=(10.0, 1.35 * len(rows) + 1.2), dpi=DPI, layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(len(rows), 2, sharex="col", squeeze=False,
+                        gridspec_kw={"width_ratios": [3.2, 1.0]})
+    zoom = t <= ZOOM_S + 1e-12
+    for (full, near), names in zip(axes, rows):
+        colors = list(_MU_COLORS) if len(names) > 1 else [NOMINAL_COLOR]
+        for ax, mask in ((full, slice(None)), (near, zoom)):
+            ax.grid(True, color="0.88", linewidth=0.6)
+            for name, color in zip(names, colors):
+                label = name.replace("mu_", "$\\mu_") + "$" if name.startswith("mu") else None
+                ax.plot(t[mask], u[mask, index[name]], color=color, linewidth=1.0,
+                        label=label)
+            _input_limit_lines(ax, names, colors, limits, annotate=ax is near)
+        full.set_ylabel(_ROW_LABELS.get(names[0], f"$\\tau_{names[0][-1]}$ (N m)"))
+        if len(names) > 1:
+            full.legend(loc="upper right", fontsize=8, ncol=3, framealpha=0.85)
+    axes[0][0].set_xlim(0.0, max(float(t[-1]), 1e-3))
+    axes[0][1].set_xlim(0.0, ZOOM_S)
+    axes[0][1].set_title(f"first {1e3 * ZOOM_S:g} ms", fontsize=9)
+    axes[-1][0].set_xlabel("time t (s)")
+    axes[-1][1].set_xlabel("time t (s)")
+    windows = _shade_windows([a for a, _ in axes], run.scenario, float(t[-1]))
+    fig.suptitle(f"Inputs of the {run.name} run, as applied; each input's limits dashed "
+                 "(Fig. 6)")
     _legend(fig, windows)
     return fig
 

@@ -1,6 +1,6 @@
-"""The disturbed case's plant (Section IV, design notes section 7): the spinning rotors, the
-drive that holds their speed, the actuator lag and the saturation, each against physics or a
-closed-form answer."""
+"""The disturbed case's plant (Section IV; docs/models.md, Helicopter with rotors): the spinning
+rotors, the drive that holds their speed, the actuator lag and the saturation, each against
+physics or a closed-form answer."""
 
 import math
 

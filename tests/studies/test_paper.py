@@ -213,16 +213,20 @@ def test_figures_plot_the_logged_data(short_paper):
     run = runs[0]
     fig = plots.figure_inputs(run)
     u = run.log["applied_command"]
-    for ax, columns in zip(fig.axes, (range(0, 1), range(1, 4), range(4, u.shape[1]))):
-        plotted = _lines(ax)
-        assert len(plotted) == len(columns)
-        for (_, y), c in zip(plotted, columns):
-            np.testing.assert_array_equal(y, u[:, c])
-    # Dashed limits: every joint's effort limit, and no other value, on the torque panel.
+    index = {n: k for k, n in enumerate(plots.INPUT_NAMES)}
+    zoom = run.t <= plots.ZOOM_S + 1e-12
+    for row, names in enumerate(plots.INPUT_ROWS):  # left: the whole run, right: its start
+        for ax, mask in ((fig.axes[2 * row], slice(None)), (fig.axes[2 * row + 1], zoom)):
+            plotted = _lines(ax)
+            assert len(plotted) == len(names)
+            for (_, y), name in zip(plotted, names):
+                np.testing.assert_array_equal(y, u[mask, index[name]])
+    # Dashed limits: each joint's panel has its own effort limit, and no other value.
     effort = models.make_plant("rigid").arm_effort_limits()
-    drawn = {round(abs(float(line.get_ydata()[0])), 9) for line in fig.axes[2].get_lines()
-             if len(line.get_xdata()) == 2}
-    assert drawn == {round(float(e), 9) for e in effort}
+    for j, e in enumerate(effort):
+        drawn = {round(abs(float(line.get_ydata()[0])), 9)
+                 for line in fig.axes[2 * (2 + j)].get_lines() if len(line.get_xdata()) == 2}
+        assert drawn == {round(float(e), 9)}, j
 
 
 def test_actual_positions_in_the_plots_match_the_model(short_paper):

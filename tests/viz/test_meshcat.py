@@ -230,11 +230,13 @@ def _cli(*args):
 
 
 def test_cli_meshcat_run_prints_url_writes_replay_and_exits(tmp_path):
+    # --no-wait: no browser here (tests/viz/test_live.py covers the wait for one).
     done = subprocess.run(_cli("--duration", "0.2", "--meshcat", "--meshcat-port", "0",
-                               "--quiet", "--out", str(tmp_path)),
+                               "--quiet", "--no-wait", "--no-plots", "--out", str(tmp_path)),
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
     assert re.search(r"Meshcat: open http://localhost:\d+", done.stdout)
+    assert (done.stdout + done.stderr).count("http://") == 1  # the URL once, not Drake's too
     for name in ("log.npz", "metrics.json", "replay.html"):
         assert (tmp_path / "nominal" / name).is_file(), name
 

@@ -102,7 +102,7 @@ def _section2_buffers(work, at, nb, nv):
 @_jit
 def _coriolis_kernel(I, Vb, A):
     """A = crf(V) I + I crm(V) + Hbar (crf(V) = -crm(V)^T), the 6x6 matrix of body b's
-    Christoffel-consistent Coriolis term (design notes, section 3), into ``A``."""
+    Christoffel-consistent Coriolis term (docs/control.md, Coordinates), into ``A``."""
     wx, wy, wz, vx, vy, vz = Vb[0], Vb[1], Vb[2], Vb[3], Vb[4], Vb[5]
     # I crm(V) column by column (crm(V) = [[w x, 0], [v x, w x]]); crf(V) I = -(I crm(V))^T
     # as I is symmetric.
@@ -173,7 +173,7 @@ def _body_sums(v, tree, s):
         _jacobian_derivative(Jb, Vb, v, s.R_all[b], cols, J_dot, work)
         if mass[b] == 0.0:
             continue
-        # M += J^T I J, C += J^T (I J_dot + 1/2 A J) (design notes, section 3).
+        # M += J^T I J, C += J^T (I J_dot + 1/2 A J) (docs/control.md, Coordinates).
         I = tree.inertia[b]
         _coriolis_kernel(I, Vb, A)
         for i in range(6):
@@ -238,7 +238,7 @@ def _body_sums(v, tree, s):
 @_jit
 def _z_times_into(G, X, identity, out):
     """out = Z X for the closed-form null-space base Z = [0, -A_q^T, E_n] with A_q = G[:, 6:]
-    (design notes, section 2): G = J_g gives Z, G = J_g_dot and ``identity`` False Z_dot.
+    (the paper's (3)-(4), Section II): G = J_g gives Z, G = J_g_dot and ``identity`` False Z_dot.
     Z's four nonzeros a row, written out."""
     for r in range(out.shape[0]):
         g0, g1, g2 = G[0, 6 + r], G[1, 6 + r], G[2, 6 + r]

@@ -80,7 +80,8 @@ class Actuation:
 
 @dataclass
 class Rotors:
-    """The spinning rotors of the "rotors" plant variant (design notes, section 7)."""
+    """The spinning rotors of the "rotors" plant variant (docs/models.md, Helicopter with
+    rotors)."""
 
     # Rotor speed, left rotor positive, right negative (rad/s).
     speed: float = 0.0
