@@ -10,6 +10,7 @@ import argparse
 import os
 import sys
 from pathlib import Path
+from typing import TextIO
 
 import numpy as np
 
@@ -80,10 +81,17 @@ def format_summary(m: dict) -> str:
     return "\n".join(lines)
 
 
-def _print_summary(result) -> None:
-    print(format_summary(result.metrics))
+def _say(args: argparse.Namespace) -> TextIO:
+    """Where the human-readable lines go: stdout, or stderr with --json (stdout then holds the
+    JSON alone)."""
+    return sys.stderr if getattr(args, "json", False) else sys.stdout
+
+
+def _print_summary(result, stream: TextIO) -> None:
+    print(format_summary(result.metrics), file=stream)
     if result.out_dir is not None:
-        print(f"wrote {result.out_dir / 'log.npz'} and {result.out_dir / 'metrics.json'}")
+        print(f"wrote {result.out_dir / 'log.npz'} and {result.out_dir / 'metrics.json'}",
+              file=stream)
 
 
 def _write_run_figures(out: Path, args: argparse.Namespace) -> None:
@@ -93,9 +101,8 @@ def _write_run_figures(out: Path, args: argparse.Namespace) -> None:
         return
     from aerial_drake.viz.run_plots import write_run_figures
     written = write_run_figures(out)
-    # stderr: with --json, stdout holds the metrics alone.
     print(f"wrote {len(written)} figures ({', '.join(p.name for p in written)}) in {out}",
-          file=sys.stderr)
+          file=_say(args))
 
 
 # Set in the restarted process, so that it never restarts again.
@@ -208,7 +215,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         except (MeshcatPortInUse, ValueError) as err:
             return report_error(args, 2, err)
         if args.meshcat:
-            print(f"Meshcat: open {view.url} in a browser", flush=True)
+            print(f"Meshcat: open {view.url} in a browser", file=_say(args), flush=True)
     before_start = None
     if view is not None and args.meshcat and not args.no_wait:
         from aerial_drake.viz.live import wait_for_browser
@@ -218,11 +225,15 @@ def _cmd_run(args: argparse.Namespace) -> int:
     realtime = args.realtime_rate
     if realtime is None and args.meshcat:
         realtime = 1.0
-    print(f"running scenario '{scenario.name}' ({scenario.duration:g} s) -> {out}", flush=True)
+    print(f"running scenario '{scenario.name}' ({scenario.duration:g} s) -> {out}",
+          file=_say(args), flush=True)
     try:
+        # The replay is written with the run's files, inside the folder's lock: never into a
+        # folder the run was refused, nor after a stop before the simulation.
         result = run_scenario(scenario, out_dir=out, progress=not args.quiet,
                               configure=view.configure if view else None,
-                              realtime_rate=realtime, before_start=before_start)
+                              realtime_rate=realtime, before_start=before_start,
+                              extra_files=view.finish if view else None)
     except (ScenarioError, UnreachablePose) as err:  # found before the simulation starts
         return report_error(args, 2, err)
     except ResultsNotWritten as err:
@@ -238,14 +249,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
     except Interrupted as err:  # before the simulation started (building the model)
         return report_error(args, err.exit_status, f"interrupted ({err}) before the "
                             "simulation; nothing written")
-    finally:
-        if view is not None:
-            print(f"wrote {view.finish(out)}", file=sys.stderr)
-    _print_summary(result)
+    _print_summary(result, _say(args))
+    if args.json:  # metrics.json as written; before the figures, which cannot lose it
+        print((out / "metrics.json").read_text(), flush=True)
     _write_run_figures(out, args)
-    if args.json:
-        from aerial_drake.simulation.outputs import strict_json
-        print(strict_json(result.metrics))
     if view is not None and args.meshcat and args.hold:
         from aerial_drake.viz.live import hold
         hold(view.meshcat, stream=sys.stderr)
@@ -283,10 +290,12 @@ def _cmd_scenarios(args: argparse.Namespace) -> int:
         print("\n'aerial-drake scenarios show NAME > my.yaml' prints one to edit; "
               "'aerial-drake run my.yaml' runs it.")
         return 0
+    if args.name is None:
+        return report_error(args, 2, "'scenarios show' needs a NAME; shipped scenarios: "
+                            f"{sorted(shipped)}")
     if args.name not in shipped:
-        print(f"error: no shipped scenario '{args.name}'. Valid names are: {sorted(shipped)}",
-              file=sys.stderr)
-        return 2
+        return report_error(args, 2, f"no shipped scenario '{args.name}'. Valid names are: "
+                            f"{sorted(shipped)}")
     try:
         load_scenario(args.name)  # the shipped file as shipped: it loads
     except ScenarioError as err:
@@ -298,6 +307,11 @@ def _cmd_scenarios(args: argparse.Namespace) -> int:
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
+    from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
+    try:  # a misspelt scenario fails at once, not after the first-run compile
+        load_scenario(args.scenario)
+    except ScenarioError as err:
+        return report_error(args, 2, err)
     _compile_first(args)
     from aerial_drake.studies.compare import cli_compare
     return cli_compare(args)
@@ -444,9 +458,9 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt as err:
         # One in the simulation is handled by the runner (logs written, exit 128 + signal);
         # this is one before it started (loading, compiling, solving the initial pose).
-        print(f"interrupted ({str(err) or 'Ctrl-C'}) outside the simulation; nothing more "
-              "written", file=sys.stderr)
-        return exit_status_of(err)
+        return report_error(args, exit_status_of(err), f"interrupted ({str(err) or 'Ctrl-C'}) "
+                            "outside a simulation: results of runs that had finished are "
+                            "kept, nothing more was written")
     except Exception as err:  # a bug, or a fault not foreseen: one line unless --debug
         if args.debug:
             raise

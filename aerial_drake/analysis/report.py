@@ -4,8 +4,6 @@ its text report, and ``aerial-drake analyze`` (:func:`cli_analyze`)."""
 from __future__ import annotations
 
 import argparse
-import json
-import math
 from pathlib import Path
 from typing import TextIO
 
@@ -28,33 +26,11 @@ from aerial_drake.analysis.region_of_attraction import region_of_attraction
 from aerial_drake.analysis.settings import FAST_SETTINGS, FULL_SETTINGS, AnalysisSettings
 from aerial_drake.dynamics.equilibrium import UnreachablePose
 from aerial_drake.robots.models import make_plant
+from aerial_drake.simulation.outputs import strict_json, write_text_atomically
 from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
 
 
 # --- Everything, to a folder ----------------------------------------------------------------
-def _nan_to_none(x):
-    """``x`` with every float NaN (also inside numpy arrays) replaced by None."""
-    if isinstance(x, dict):
-        return {k: _nan_to_none(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_nan_to_none(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _nan_to_none(x.tolist())
-    if isinstance(x, (float, np.floating)) and math.isnan(x):
-        return None
-    return x
-
-
-def _json_default(x):
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    if isinstance(x, (np.floating, np.integer, np.bool_)):
-        return x.item()
-    if isinstance(x, complex):
-        return [x.real, x.imag]
-    raise TypeError(f"not JSON serialisable: {type(x)}")
-
-
 def analyze(out_dir: str | Path = "out/analysis", *, scenario: str = "nominal",
             settings: AnalysisSettings = FULL_SETTINGS, seed: int = 0,
             stream: TextIO | None = None) -> dict:
@@ -109,8 +85,7 @@ def analyze(out_dir: str | Path = "out/analysis", *, scenario: str = "nominal",
         fig.savefig(out / name, dpi=120)
         report["figures"].append(name)
     # JSON has no NaN: undefined numbers are written as null.
-    (out / "analysis.json").write_text(
-        json.dumps(_nan_to_none(report), indent=2, default=_json_default, allow_nan=False))
+    write_text_atomically(out / "analysis.json", strict_json(report))
     say(f"wrote {out / 'analysis.json'} and {', '.join(figures)}")
     return report
 

@@ -15,8 +15,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from aerial_drake.control.baselines import BASELINE_TYPES, BaselineController
-from aerial_drake.control.controller import make_controller
+from aerial_drake.control.baselines.params import BASELINE_TYPES
 from aerial_drake.robots.models import AerialManipulator
 from aerial_drake.simulation.reference_pose import reference_configuration
 from aerial_drake.trajectories.paper import evaluate_reference
@@ -29,7 +28,11 @@ ControllerFactory = Callable[[Any, AerialManipulator], object]
 PAPER_CONTROLLER = "paper"
 
 
+# The controllers' modules are imported when a loop is built, not when a scenario is loaded
+# (the scenarios import this module to check controller.type): they bring pydrake's systems
+# and the compiled law's numba.
 def _paper(scenario: Any, model: AerialManipulator):
+    from aerial_drake.control.controller import make_controller
     return make_controller(model, scenario.gains, sigma_min_J3_limit=scenario.sigma_min_J3_limit,
                            f_d_limit=scenario.f_d_limit, period=scenario.controller_period)
 
@@ -49,6 +52,7 @@ def body_offset_in_heading_frame(scenario: Any, model: AerialManipulator) -> np.
 
 def _baseline(kind: str) -> ControllerFactory:
     def factory(scenario: Any, model: AerialManipulator):
+        from aerial_drake.control.baselines.controller import BaselineController
         q3 = model.arm_joints[2]
         return BaselineController(
             model.plant, model.base_body, model.end_effector_frame, q3.velocity_start(),

@@ -25,6 +25,8 @@ import tempfile
 from pathlib import Path
 from typing import IO, Any, Callable
 
+import numpy as np
+
 try:
     import fcntl
 except ImportError:  # not POSIX: no lock (documented)
@@ -40,14 +42,20 @@ class ResultsNotWritten(OutputError):
 
 
 def finite_or_none(value: Any) -> Any:
-    """``value`` with every non-finite float (NaN, inf) replaced by None, recursively."""
+    """``value`` with every non-finite float (NaN, inf) replaced by None, recursively, numpy
+    arrays as lists and complex numbers as ``[real, imag]`` (eigenvalues), ready for strict
+    JSON."""
     if isinstance(value, float):
         return value if math.isfinite(value) else None
+    if isinstance(value, complex):
+        return [finite_or_none(value.real), finite_or_none(value.imag)]
     if isinstance(value, dict):
         return {k: finite_or_none(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
         return [finite_or_none(v) for v in value]
-    if hasattr(value, "item") and hasattr(value, "dtype"):  # a numpy scalar
+    if isinstance(value, np.ndarray):
+        return finite_or_none(value.tolist())
+    if isinstance(value, np.generic):  # a numpy scalar
         return finite_or_none(value.item())
     return value
 

@@ -307,7 +307,8 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
                  realtime_rate: float | None = None,
                  zero_controller: bool = False,
                  controller_factory: ControllerFactory | None = None,
-                 before_start: Callable[[], None] | None = None) -> RunResult:
+                 before_start: Callable[[], None] | None = None,
+                 extra_files: Callable[[], dict[str, str]] | None = None) -> RunResult:
     """Simulate ``scenario``; write ``log.npz``, ``scenario.yaml`` and ``metrics.json`` (last)
     to the folder ``out_dir`` if given (docs/reliability.md).
 
@@ -323,7 +324,9 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     :mod:`aerial_drake.simulation.controllers`) overrides the scenario's ``controller.type``.
     ``before_start()`` is called once everything is built and the initial state set, just
     before the simulation (and its wall clock) starts: e.g. to wait for a browser to open the
-    live view.
+    live view. ``extra_files()`` gives more ``{name: text}`` files for the run's folder (e.g.
+    the viewer's ``replay.html``), written with the others, inside the folder's lock and
+    before ``metrics.json``; it is called once the simulation has stopped, however it stopped.
     """
     if not isinstance(scenario, Scenario):
         raise ScenarioError(f"scenario: expected a Scenario, got {type(scenario).__name__} "
@@ -339,7 +342,8 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     try:
         with handling():
             return _run_locked(scenario, lock, progress, stream, configure, realtime_rate,
-                               zero_controller, controller_factory, before_start)
+                               zero_controller, controller_factory, before_start,
+                               extra_files)
     finally:
         if lock is not None:
             lock.release()
@@ -349,7 +353,8 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
                 stream: TextIO | None, configure: Callable | None,
                 realtime_rate: float | None, zero_controller: bool,
                 controller_factory: ControllerFactory | None,
-                before_start: Callable[[], None] | None) -> RunResult:
+                before_start: Callable[[], None] | None,
+                extra_files: Callable[[], dict[str, str]] | None) -> RunResult:
     stream = stream if stream is not None else sys.stderr
     if lock is not None:
         _note_replaced_results(scenario, lock.folder, stream)
@@ -392,8 +397,9 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
         metrics = _metrics(scenario, loop, arrays, wall, sim_time)
         result = RunResult(scenario=scenario, log=arrays, metrics=metrics, wall_time_s=wall,
                            completed=failure is None, failure=failure)
+        extra = extra_files() if extra_files is not None else {}
         if lock is not None:
-            result.out_dir = write_outputs(result, lock.folder)
+            result.out_dir = write_outputs(result, lock.folder, extra)
     if interrupted is None and held:  # a signal while writing: the files are complete
         interrupted = held[0]
         failure = failure or (f"interrupted ({signal_name(interrupted)}) while writing the "
@@ -445,10 +451,12 @@ def _metrics(scenario: Scenario, loop: ClosedLoop, log: dict, wall: float,
     return metrics
 
 
-def write_outputs(result: RunResult, out_dir: str | Path) -> Path:
-    """Write the run's files into ``out_dir`` (aerial_drake.simulation.outputs): each to a
-    temporary name then renamed, ``metrics.json`` last (a folder with ``metrics.json`` holds
-    one run's complete set); a write that fails leaves none of them (OutputError)."""
+def write_outputs(result: RunResult, out_dir: str | Path,
+                  extra: dict[str, str] | None = None) -> Path:
+    """Write the run's files, and ``extra`` ``{name: text}`` ones, into ``out_dir``
+    (aerial_drake.simulation.outputs): each to a temporary name then renamed, ``metrics.json``
+    last (a folder with ``metrics.json`` holds one run's complete set); a write that fails
+    leaves none of them (OutputError)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     names = json.dumps({"diagnostics": [list(x) for x in DIAGNOSTICS_LAYOUT]})
@@ -462,5 +470,7 @@ def write_outputs(result: RunResult, out_dir: str | Path) -> Path:
         ("log.npz", lambda f: np.savez_compressed(f, layout=np.array(names), **arrays)),
         # The scenario as run (after overrides), so a run folder describes itself.
         ("scenario.yaml", lambda f: f.write(scenario_text.encode("utf-8"))),
+        *((name, lambda f, text=text: f.write(text.encode("utf-8")))
+          for name, text in (extra or {}).items()),
     ], ("metrics.json", lambda f: f.write(metrics_text.encode("utf-8"))))
     return out

@@ -45,8 +45,6 @@ busy is an error (:class:`MeshcatPortInUse`), never silently another one.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 from pydrake.geometry import (
     Cylinder,
@@ -78,6 +76,8 @@ from aerial_drake.trajectories.reference import (
 
 #: Seconds between frames (live and recorded), for the robot and the overlays.
 PUBLISH_PERIOD = 0.02
+#: The replay's file name in a run's folder.
+REPLAY_FILE = "replay.html"
 #: Where the overlays live in the Meshcat scene tree.
 OVERLAY_PREFIX = "/drake/overlays"
 #: Where MeshcatVisualizer puts the robot (``/drake/<prefix>/<model>/<body>/...``).
@@ -411,13 +411,10 @@ class MeshcatView:
         self.meshcat.StartRecording(1.0 / self.publish_period,
                                     set_visualizations_while_recording=self.live)
 
-    def finish(self, out_dir: str | Path) -> Path:
-        """Stop recording, publish the animation to connected browsers and write
-        ``out_dir/replay.html``; returns its path."""
+    def finish(self) -> dict[str, str]:
+        """Stop recording, publish the animation to connected browsers, and return the replay
+        as ``{"replay.html": text}`` for the run's result set (``run_scenario``'s
+        ``extra_files``: written with the run's other files, inside its folder's lock)."""
         self.meshcat.StopRecording()
         self.meshcat.PublishRecording()
-        out = Path(out_dir)
-        out.mkdir(parents=True, exist_ok=True)
-        path = out / "replay.html"
-        path.write_text(self.meshcat.StaticHtml())
-        return path
+        return {REPLAY_FILE: self.meshcat.StaticHtml()}

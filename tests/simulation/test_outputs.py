@@ -5,6 +5,7 @@ import json
 import math
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from aerial_drake.simulation import outputs as dut
@@ -18,6 +19,15 @@ DOC = Path(__file__).resolve().parents[2] / "docs" / "reliability.md"
 def test_strict_json_writes_null_for_non_finite_figures():
     text = dut.strict_json({"a": math.nan, "b": [1.0, math.inf], "c": {"d": -math.inf}})
     assert json.loads(text) == {"a": None, "b": [1.0, None], "c": {"d": None}}
+
+
+def test_strict_json_takes_numpy_arrays_scalars_and_eigenvalues():
+    """What the analysis report holds: arrays with NaN/inf, numpy scalars, complex poles."""
+    text = dut.strict_json({"x": np.array([[1.0, np.nan], [np.inf, 2.0]]),
+                            "s": np.float64(np.nan), "n": np.int64(3), "ok": np.bool_(True),
+                            "poles": np.array([-1.0 + 2.0j, complex(np.nan, 1.0)])})
+    assert json.loads(text) == {"x": [[1.0, None], [None, 2.0]], "s": None, "n": 3,
+                                "ok": True, "poles": [[-1.0, 2.0], [None, 1.0]]}
 
 
 @pytest.mark.parametrize("name,folder", [

@@ -62,8 +62,9 @@ def watched(tmp_path_factory):
                               plant_variant="rotors")
     view = dut.MeshcatView(scenario, port=0)
     out = tmp_path_factory.mktemp("watched")
-    result = run_scenario(scenario, out_dir=out, progress=False, configure=view.configure)
-    replay = view.finish(out)
+    result = run_scenario(scenario, out_dir=out, progress=False, configure=view.configure,
+                          extra_files=view.finish)
+    replay = out / dut.REPLAY_FILE
     return view, result, replay
 
 

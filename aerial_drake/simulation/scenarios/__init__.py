@@ -17,7 +17,7 @@ from pathlib import Path
 from pydrake.common.yaml import yaml_dump, yaml_load_typed
 from pydrake.systems.analysis import SimulatorConfig
 
-from aerial_drake.control.baselines import BaselineParams
+from aerial_drake.control.baselines.params import BaselineParams
 from aerial_drake.control.law import F_D_LIMIT, SIGMA_MIN_J3_LIMIT, Gains
 from aerial_drake.drake_compat import SimulatorFieldError, translate_simulator_section
 from aerial_drake.robots.models import PLANT_VARIANTS

@@ -1,0 +1,54 @@
+"""What the command line prints where: with --json, stdout is one JSON document (success or
+failure); the viewer's replay is part of the run's result set, never written into a folder the
+run was refused."""
+
+import json
+
+from aerial_drake import cli
+from aerial_drake.simulation import outputs
+
+SHORT = ["--duration", "0.05", "--quiet"]
+
+
+def test_json_stdout_is_the_metrics_alone(tmp_path, capsys):
+    status = cli.main(["run", "nominal", "--out", str(tmp_path), "--json", *SHORT])
+    out, err = capsys.readouterr()
+    assert status == 0, err
+    metrics = json.loads(out)  # the whole of stdout: no summary, no "running ..." line
+    assert metrics["completed"] is True
+    assert metrics == json.loads((tmp_path / "nominal" / "metrics.json").read_text())
+    assert "running scenario" in err and "wrote" in err  # the human lines, on stderr
+
+
+def test_json_stdout_is_the_error_object_alone(tmp_path, capsys):
+    folder = tmp_path / "nominal"
+    folder.mkdir()
+    lock = outputs.prepare_folder(folder)  # another run holds the folder
+    try:
+        status = cli.main(["run", "nominal", "--out", str(tmp_path), "--json", *SHORT])
+    finally:
+        lock.release()
+    out, _ = capsys.readouterr()
+    assert status == 2
+    assert json.loads(out)["error"]["exit_status"] == 2
+
+
+def test_replay_is_written_with_the_run_and_never_into_a_refused_folder(tmp_path, capsys):
+    folder = tmp_path / "nominal"
+    folder.mkdir()
+    lock = outputs.prepare_folder(folder)
+    try:
+        status = cli.main(["run", "nominal", "--out", str(tmp_path), "--record", *SHORT])
+    finally:
+        lock.release()
+    assert status == 2
+    assert not (folder / "replay.html").exists()
+    assert cli.main(["run", "nominal", "--out", str(tmp_path), "--record", *SHORT]) == 0
+    assert (folder / "replay.html").read_text().lstrip().lower().startswith("<!doctype html")
+    assert not list(folder.glob(".*.tmp"))  # written atomically
+
+
+def test_scenarios_show_without_a_name_says_what_is_missing(capsys):
+    assert cli.main(["scenarios", "show"]) == 2
+    err = capsys.readouterr().err
+    assert "needs a NAME" in err and "nominal" in err
