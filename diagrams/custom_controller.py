@@ -18,7 +18,8 @@ from pathlib import Path
 
 import numpy as np
 from _common import write_graphviz
-from pydrake.systems.framework import LeafSystem
+from pydrake.common.value import AbstractValue
+from pydrake.systems.framework import LeafSystem, ValueProducer
 
 from aerial_drake.control.baselines.vehicle import body_reference, geometric_vehicle_law
 from aerial_drake.control.interface import error_diagnostics
@@ -53,10 +54,18 @@ class JointHoldController(LeafSystem):
             ("state", model.plant.num_multibody_states()), ("com_reference", 15),
             ("task_reference", 27), ("heading_reference", 9))]
         n = len(model.arm_joints)
-        self.DeclareVectorOutputPort("command", 4 + n, lambda c, o: o.SetFromVector(
-            self._law(c)[0]))
-        self.DeclareVectorOutputPort("diagnostics", DIAGNOSTICS_SIZE, lambda c, o: (
-            o.SetFromVector(self._law(c)[1])))
+        # The law once per input change, both outputs read from it (a cache entry): not
+        # once per output port.
+        self._solution = self.DeclareCacheEntry(
+            description="law", value_producer=ValueProducer(
+                allocate=AbstractValue.Make(object()).Clone,
+                calc=lambda c, value: value.set_value(self._law(c))),
+            prerequisites_of_calc={self.all_input_ports_ticket()})
+        for i, (name, size) in enumerate((("command", 4 + n),
+                                          ("diagnostics", DIAGNOSTICS_SIZE))):
+            self.DeclareVectorOutputPort(
+                name, size, lambda c, o, i=i: o.SetFromVector(self._solution.Eval(c)[i]),
+                prerequisites_of_calc={self._solution.ticket()})
 
     def _law(self, context):
         x, com, task, heading = (p.Eval(context) for p in self._ports)
