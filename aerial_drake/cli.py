@@ -147,9 +147,9 @@ def check_options(args: argparse.Namespace) -> dict:
         overrides["duration"] = args.duration
     if args.max_log_mb is not None:
         overrides["max_log_mb"] = args.max_log_mb
-    if args.realtime_rate is not None and not 0 <= args.realtime_rate <= 1000:
-        raise ScenarioError(f"--realtime-rate must be >= 0 and <= 1000 (1 = real time); got "
-                            f"{args.realtime_rate}", "--realtime-rate")
+    if args.realtime_rate is not None:  # the range of simulator.target_realtime_rate
+        from aerial_drake.simulation.scenarios.checks import REALTIME, number
+        number("--realtime-rate", args.realtime_rate, REALTIME)
     if args.meshcat_port is not None and not 0 <= args.meshcat_port <= 65535:
         raise ScenarioError(f"--meshcat-port must be a port number, 0 to 65535; got "
                             f"{args.meshcat_port}", "--meshcat-port")

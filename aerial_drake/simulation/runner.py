@@ -52,7 +52,7 @@ from aerial_drake.simulation.outputs import (
 )
 from aerial_drake.simulation.reference_pose import reference_configuration
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
-from aerial_drake.simulation.scenarios.checks import estimated_log_mb
+from aerial_drake.simulation.scenarios.checks import REALTIME, estimated_log_mb, number
 from aerial_drake.trajectories.paper import compile_reference, sample_reference
 
 
@@ -333,10 +333,8 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
                             f"{scenario!r}; load one with aerial_drake.simulation.scenarios."
                             "load_scenario(name_or_path)", "scenario")
     scenario.validate()
-    if realtime_rate is not None and not (
-            isinstance(realtime_rate, (int, float)) and 0 <= realtime_rate <= 1000):
-        raise ScenarioError(f"realtime_rate must be a number >= 0 and <= 1000; got "
-                            f"{realtime_rate!r}", "realtime_rate")
+    if realtime_rate is not None:  # the range of simulator.target_realtime_rate
+        number("realtime_rate", realtime_rate, REALTIME)
     need_mb = estimated_log_mb(scenario.duration, scenario.log_period)
     lock = prepare_folder(out_dir, need_mb) if out_dir is not None else None
     try:
