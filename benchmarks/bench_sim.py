@@ -26,11 +26,13 @@ import numpy as np
 
 
 def worker(scenario_name: str, duration: float, zero: bool) -> dict:
+    from aerial_drake.simulation.controllers import zero_controller
     from aerial_drake.simulation.runner import run_scenario
     from aerial_drake.simulation.scenarios import load_scenario
 
     scenario = load_scenario(scenario_name, overrides={"duration": duration})
-    result = run_scenario(scenario, progress=False, zero_controller=zero)
+    result = run_scenario(scenario, progress=False,
+                          controller_factory=zero_controller if zero else None)
     out = {"wall_s": result.wall_time_s,
            "rtf": result.metrics["simulated_time_s"] / result.wall_time_s,
            "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}

@@ -37,6 +37,14 @@ def _paper(scenario: Any, model: AerialManipulator):
                            f_d_limit=scenario.f_d_limit, period=scenario.controller_period)
 
 
+def zero_controller(scenario: Any, model: AerialManipulator):
+    """:class:`~aerial_drake.control.controller.ZeroController`: the paper controller's ports
+    and sampling, zero outputs. The benchmarks' baseline: a run that costs the plant, the
+    reference and the logging but no control law."""
+    from aerial_drake.control.controller import make_controller
+    return make_controller(model, scenario.gains, period=scenario.controller_period, zero=True)
+
+
 def body_offset_in_heading_frame(scenario: Any, model: AerialManipulator) -> np.ndarray:
     """The CoM's offset from the helicopter body at the reference configuration of t = 0, in
     the heading frame [b1d, e3 x b1d, e3]: what the baselines' body reference keeps."""

@@ -36,7 +36,7 @@ from pydrake.systems.primitives import (
     VectorLogSink,
 )
 
-from aerial_drake.control.controller import DecoupledController, make_controller
+from aerial_drake.control.controller import DecoupledController
 from aerial_drake.control.interface import check_controller_ports
 from aerial_drake.robots.models import (
     ROTOR_DIRECTIONS,
@@ -170,18 +170,15 @@ def _add_command_path(
 
 
 def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
-                      zero_controller: bool = False,
                       controller_factory: ControllerFactory | None = None) -> ClosedLoop:
     """The closed loop of ``scenario`` as one Diagram with exported disturbance inputs.
 
-    ``zero_controller`` puts :class:`~aerial_drake.control.controller.ZeroController` (same ports,
-    zero outputs) in the controller's place: the benchmarks' baseline, which costs the plant,
-    the reference and the logging but no control law. ``controller_factory`` (``factory(
-    scenario, model) -> system``) overrides the scenario's ``controller.type``.
+    ``controller_factory`` (``factory(scenario, model) -> system``,
+    :mod:`aerial_drake.simulation.controllers`; e.g. its ``zero_controller``, the benchmarks'
+    baseline) overrides the scenario's ``controller.type``.
     """
     builder = DiagramBuilder()
-    loop = add_closed_loop(builder, scenario, zero_controller=zero_controller,
-                           controller_factory=controller_factory)
+    loop = add_closed_loop(builder, scenario, controller_factory=controller_factory)
     for port_name, port in loop.inputs.items():
         builder.ExportInput(port, port_name)
     for port_name, port in loop.outputs.items():
@@ -195,7 +192,6 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
 
 
 def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
-                    zero_controller: bool = False,
                     controller_factory: ControllerFactory | None = None) -> ClosedLoop:
     """Add the systems of the closed loop of ``scenario`` to ``builder`` (its disturbance
     inputs left to connect); the returned :class:`ClosedLoop` names its ports."""
@@ -212,13 +208,9 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
     # (its own discrete state); period 0 means continuous feedback.
     # The controller: the scenario's ``controller.type`` (default the paper's), or the
     # caller's factory (aerial_drake.simulation.controllers).
-    if zero_controller:
-        system = make_controller(model, scenario.gains, period=scenario.controller_period,
-                                 zero=True)
-    else:
-        factory = controller_factory or scenario_controller_factory(scenario)
-        system = factory(scenario, model)
-        check_controller_ports(system, model.plant.num_multibody_states(), n)
+    factory = controller_factory or scenario_controller_factory(scenario)
+    system = factory(scenario, model)
+    check_controller_ports(system, model.plant.num_multibody_states(), n)
     controller = builder.AddSystem(system)
     controller.set_name("controller")
     for port in ("com_reference", "task_reference", "heading_reference"):
@@ -306,7 +298,6 @@ LOGGED_PORTS = ("plant_state", "command", "applied_command", "diagnostics", "rot
 
 
 def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = None,
-                     zero_controller: bool = False,
                      controller_factory: ControllerFactory | None = None,
                      ) -> tuple[DiagramBuilder, ClosedLoop, dict[str, VectorLogSink]]:
     """Add the closed loop's systems (:func:`add_closed_loop`, not nested in a Diagram of
@@ -316,8 +307,7 @@ def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = Non
     (``diagram`` None; its ports by name) and the loggers by port name.
     """
     builder = builder or DiagramBuilder()
-    loop = add_closed_loop(builder, scenario, zero_controller=zero_controller,
-                           controller_factory=controller_factory)
+    loop = add_closed_loop(builder, scenario, controller_factory=controller_factory)
     for target, port in (("helicopter", "helicopter_wrench"),
                          ("end_effector", "end_effector_wrench")):
         source = add_wrench_source(builder, scenario.disturbances, target)

@@ -305,7 +305,6 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
                  progress: bool = True, stream: TextIO | None = None,
                  configure: Callable | None = None,
                  realtime_rate: float | None = None,
-                 zero_controller: bool = False,
                  controller_factory: ControllerFactory | None = None,
                  before_start: Callable[[], None] | None = None,
                  extra_files: Callable[[], dict[str, str]] | None = None) -> RunResult:
@@ -340,7 +339,7 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     try:
         with handling():
             return _run_locked(scenario, lock, progress, stream, configure, realtime_rate,
-                               zero_controller, controller_factory, before_start,
+                               controller_factory, before_start,
                                extra_files)
     finally:
         if lock is not None:
@@ -349,15 +348,13 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
 
 def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
                 stream: TextIO | None, configure: Callable | None,
-                realtime_rate: float | None, zero_controller: bool,
-                controller_factory: ControllerFactory | None,
+                realtime_rate: float | None, controller_factory: ControllerFactory | None,
                 before_start: Callable[[], None] | None,
                 extra_files: Callable[[], dict[str, str]] | None) -> RunResult:
     stream = stream if stream is not None else sys.stderr
     if lock is not None:
         _note_replaced_results(scenario, lock.folder, stream)
-    builder, loop, loggers = build_simulation(scenario, zero_controller=zero_controller,
-                                              controller_factory=controller_factory)
+    builder, loop, loggers = build_simulation(scenario, controller_factory=controller_factory)
     check_workspace(scenario, loop.controller_model)
     if configure is not None:
         configure(builder, loop)

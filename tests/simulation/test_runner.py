@@ -10,6 +10,7 @@ import pytest
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 
 from aerial_drake.simulation import runner as dut
+from aerial_drake.simulation.controllers import zero_controller
 from aerial_drake.simulation.diagram import build_simulation
 from aerial_drake.simulation.scenarios import load_scenario
 from aerial_drake.trajectories.generator import ReferenceGenerator
@@ -25,7 +26,7 @@ def short_nominal():
 def zero_run():
     """The nominal diagram with the zero controller (cheap: no control law), 2.5 s."""
     stream = io.StringIO()
-    result = dut.run_scenario(short_nominal(), stream=stream, zero_controller=True)
+    result = dut.run_scenario(short_nominal(), stream=stream, controller_factory=zero_controller)
     return result, stream.getvalue()
 
 
@@ -46,7 +47,7 @@ def test_pauses_fall_on_logged_samples(zero_run):
 def test_pausing_changes_no_number(zero_run):
     """The same diagram advanced in one AdvanceTo call logs the same doubles."""
     scenario = short_nominal()
-    builder, loop, loggers = build_simulation(scenario, zero_controller=True)
+    builder, loop, loggers = build_simulation(scenario, controller_factory=zero_controller)
     simulator = Simulator(builder.Build())
     ApplySimulatorConfig(scenario.simulator, simulator)
     context = simulator.get_mutable_context()
@@ -93,7 +94,8 @@ def test_diverging_plant_stops_with_the_time_of_the_first_non_finite_sample(
     monkeypatch.setattr(dut, "set_initial_state", nan_rate)
     with pytest.raises(dut.SimulationFailed,
                        match=r"t = 0\.0000 s: the plant state became non-finite \(diverged\)"):
-        dut.run_scenario(short_nominal(), out_dir=tmp_path, progress=False, zero_controller=True)
+        dut.run_scenario(short_nominal(), out_dir=tmp_path, progress=False,
+                         controller_factory=zero_controller)
     metrics = json.loads((tmp_path / "metrics.json").read_text())
     assert metrics["completed"] is False and "diverged" in metrics["failure"]
     assert metrics["simulated_time_s"] == 0.0
