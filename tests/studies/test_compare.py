@@ -238,3 +238,25 @@ def test_displacement_windows_come_from_the_scenario(short_compare):
     assert rows[0]["ee_moved_max_m"] == 0.0 and rows[-1]["ee_moved_max_m"] == 0.0
     assert dut.displacement_windows(run.scenario) == [(4.0, 5.0), (5.0, 6.0), (9.0, 10.0),
                                                       (10.0, 11.0)]
+
+
+def test_the_overlays_shade_every_runs_windows_in_the_controllers_colours(short_compare):
+    """The compare figures are viz.plots' overlays: every run's disturbance windows shaded
+    (the union, not the first run's alone), each controller in its colour."""
+    from aerial_drake.viz import compare as figures
+
+    paper, uncoupled = short_compare.runs["paper"], short_compare.runs["uncoupled"]
+    pushed = dataclasses.replace(uncoupled, scenario=dataclasses.replace(
+        uncoupled.scenario, disturbances=[Disturbance(start=0.1, stop=0.2)]))
+    runs = {"paper": dataclasses.replace(paper, scenario=dataclasses.replace(
+        paper.scenario, disturbances=[])), "uncoupled": pushed}
+    for make in (figures.figure_end_effector, figures.figure_orientation_errors,
+                 figures.figure_inputs):
+        fig = make(runs, "nominal")
+        for ax in fig.axes:
+            spans = [(round(p.get_x(), 9), round(p.get_x() + p.get_width(), 9))
+                     for p in ax.patches]
+            assert spans == [(0.1, 0.2)], make.__name__
+        colors = {line.get_color() for line in fig.axes[0].lines}
+        assert {"black", "tab:purple"} <= colors, make.__name__
+        assert "nominal" in fig._suptitle.get_text()
