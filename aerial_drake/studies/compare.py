@@ -17,10 +17,8 @@ register_controller`) is unknown to spawned workers: compare it with ``jobs=1``.
 from __future__ import annotations
 
 import argparse
-import concurrent.futures
 import dataclasses
-import json
-import multiprocessing
+import functools
 import os
 import sys
 from dataclasses import dataclass, field
@@ -29,12 +27,13 @@ from typing import TextIO
 
 import numpy as np
 
-from aerial_drake.dynamics.equilibrium import UnreachablePose
-from aerial_drake.simulation.runner import SimulationFailed, run_scenario
-from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
-from aerial_drake.studies.paper import format_table
+from aerial_drake.simulation.metrics import RESPONSE_TAIL_S
+from aerial_drake.simulation.outputs import OutputError, strict_json, write_text_atomically
+from aerial_drake.simulation.scenarios import ScenarioError, folder_name, load_scenario
+from aerial_drake.studies.paper import format_table, run_batch
+from aerial_drake.studies.reporting import report_error, report_exception
 from aerial_drake.viz.compare import write_compare_figures
-from aerial_drake.viz.plots import Run, load_run
+from aerial_drake.viz.plots import Run
 
 DEFAULT_CONTROLLERS = ("paper", "uncoupled", "static_compensation")
 
@@ -46,10 +45,12 @@ class CompareResult:
     failures: dict[str, str] = field(default_factory=dict)
     figures: list[Path] = field(default_factory=list)
     table: str = ""
+    # The signal that stopped the comparison (its remaining runs were not started), if one did.
+    interrupted: int | None = None
 
     @property
     def completed(self) -> bool:
-        return not self.failures
+        return not self.failures and self.interrupted is None
 
 
 def _scenario_for(scenario: str, controller: str, duration: float | None,
@@ -62,16 +63,24 @@ def _scenario_for(scenario: str, controller: str, duration: float | None,
     return dataclasses.replace(base, controller=config).validate()
 
 
-def _run_one(scenario: str, controller: str, duration: float | None, out: str,
-             progress: bool = False, stream: TextIO | None = None,
-             undisturbed: bool = False) -> str | None:
-    """Run ``scenario`` with ``controller`` into ``out``; the failure message or None."""
-    try:
-        run_scenario(_scenario_for(scenario, controller, duration, undisturbed), out_dir=out,
-                     progress=progress, stream=stream)
-    except SimulationFailed as err:
-        return str(err)
-    return None
+def _rebuild(scenario: str, duration: float | None, undisturbed: bool, controller: str):
+    """:func:`_scenario_for` with the controller last, for a worker process (picklable with
+    functools.partial; a Scenario itself does not pickle)."""
+    return _scenario_for(scenario, controller, duration, undisturbed)
+
+
+def _controller_folders(out: Path, controllers: tuple[str, ...]) -> dict[str, Path]:
+    """Each controller's run folder, from its sanitised name (never outside ``out``)."""
+    folders: dict[str, Path] = {}
+    for name in controllers:
+        safe = folder_name(name)
+        if not safe:
+            raise ScenarioError(f"--controllers: {name!r} cannot name a run folder")
+        if any(f.name == safe for f in folders.values()):
+            raise ScenarioError(f"--controllers: two controllers share the run folder "
+                                f"'{safe}': {list(controllers)}")
+        folders[name] = out / safe
+    return folders
 
 
 def run_compare(scenario: str, controllers: tuple[str, ...] = DEFAULT_CONTROLLERS,
@@ -79,53 +88,48 @@ def run_compare(scenario: str, controllers: tuple[str, ...] = DEFAULT_CONTROLLER
                 jobs: int = 1, progress: bool = True, stream: TextIO | None = None,
                 undisturbed: bool = False) -> CompareResult:
     """Run ``scenario`` (a shipped name or a YAML path) once per controller into
-    ``out_dir/<scenario name>/<controller>/`` and write the overlays and the table there.
+    ``out_dir/<scenario folder name>/<controller>/`` and write the overlays and the table
+    there (the folder names sanitised as ``run``'s: Scenario.folder_name).
     ``undisturbed``: the scenario without its disturbance windows (named
-    ``<name>_undisturbed``), the reference of :func:`disturbance_displacement`."""
+    ``<name>_undisturbed``), the reference of :func:`disturbance_displacement`.
+
+    Every scenario is built and checked before anything runs (ScenarioError,
+    UnreachablePose); an output folder that cannot be used raises OutputError. A controller
+    whose run fails is recorded in :attr:`CompareResult.failures` and the next one runs. A
+    signal (SIGINT, SIGTERM, SIGHUP) stops the comparison as it stops ``run paper``: the
+    running run(s) write their logs, the remaining controllers are not started, no figure,
+    summary or comparison is written, and :attr:`CompareResult.interrupted` holds the
+    signal's number (:func:`aerial_drake.studies.paper.run_batch`, also with ``jobs`` > 1).
+    Only complete run folders (``metrics.json`` present) are loaded and drawn."""
     if not controllers:
         raise ScenarioError("--controllers: name at least one controller")
     if len(set(controllers)) != len(controllers):
         raise ScenarioError(f"--controllers: a controller is named twice: {list(controllers)}")
-    first = _scenario_for(scenario, controllers[0], duration, undisturbed)
-    for name in controllers[1:]:  # every name checked before anything runs
-        _scenario_for(scenario, name, duration, undisturbed)
-    out = Path(out_dir) / first.name
-    out.mkdir(parents=True, exist_ok=True)
+    scenarios = {name: _scenario_for(scenario, name, duration, undisturbed)
+                 for name in controllers}  # every name checked before anything runs
+    first = scenarios[controllers[0]]
+    out = Path(out_dir) / first.folder_name
+    folders = _controller_folders(out, controllers)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise OutputError(f"output folder {out} cannot be created ({err.strerror or err}): "
+                          "choose another --out") from None
     result = CompareResult(out_dir=out)
-    folders = {name: out / name for name in controllers}
-    if jobs > 1 and len(controllers) > 1:
-        context = multiprocessing.get_context("spawn")
-        with concurrent.futures.ProcessPoolExecutor(min(jobs, len(controllers)),
-                                                    mp_context=context) as pool:
-            futures = {name: pool.submit(_run_one, scenario, name, duration, str(folder),
-                                         undisturbed=undisturbed)
-                       for name, folder in folders.items()}
-            if progress and stream is not None:
-                stream.write(f"running {list(controllers)} on '{first.name}' in "
-                             f"{min(jobs, len(controllers))} processes\n")
-            for name, future in futures.items():
-                failure = future.result()
-                if failure:
-                    result.failures[name] = failure
-                if progress and stream is not None:
-                    stream.write(f"  {name}: {'done' if not failure else failure}\n")
-    else:
-        for name, folder in folders.items():
-            if progress and stream is not None:
-                stream.write(f"running '{first.name}' with controller '{name}' -> {folder}\n")
-            failure = _run_one(scenario, name, duration, str(folder), progress, stream,
-                               undisturbed)
-            if failure:
-                result.failures[name] = failure
-    for name, folder in folders.items():
-        if (folder / "log.npz").is_file():
-            result.runs[name] = load_run(folder)
-    if result.runs:
-        result.figures = write_compare_figures(out, result.runs, first.name)
+    batch = run_batch(scenarios, folders, jobs=jobs,
+                      rebuild=functools.partial(_rebuild, scenario, duration, undisturbed),
+                      progress=progress, stream=stream,
+                      labels={n: f"'{first.name}' with controller '{n}'" for n in controllers})
+    result.runs, result.failures, result.interrupted = (batch.runs, batch.failures,
+                                                        batch.interrupted)
     metrics = {n: r.metrics for n, r in result.runs.items()}
     result.table = format_table(metrics)
-    (out / "summary.txt").write_text(result.table + "\n")
-    (out / "comparison.json").write_text(json.dumps(comparison_summary(metrics), indent=2))
+    if result.interrupted is not None:
+        return result
+    if result.runs:
+        result.figures = write_compare_figures(out, result.runs, first.name)
+    write_text_atomically(out / "summary.txt", result.table + "\n")
+    write_text_atomically(out / "comparison.json", strict_json(comparison_summary(metrics)))
     return result
 
 
@@ -144,15 +148,30 @@ def comparison_summary(metrics: dict[str, dict]) -> dict:
     return out
 
 
+def displacement_windows(scenario) -> list[tuple[float, float]]:
+    """The windows :func:`disturbance_displacement` reports, from ``scenario``'s
+    disturbances: each window ``[start, stop]`` and the second after it, ``[stop, stop +
+    RESPONSE_TAIL_S]`` cut at the next window's start (the metrics' response tail)."""
+    spans = sorted((float(d.start), float(d.stop)) for d in scenario.disturbances)
+    starts = [a for a, _ in spans]
+    out: list[tuple[float, float]] = []
+    for a, b in spans:
+        out.append((a, b))
+        end = min([b + RESPONSE_TAIL_S] + [s for s in starts if s > a])
+        if end > b:
+            out.append((b, end))
+    return out
+
+
 def disturbance_displacement(disturbed: Run, undisturbed: Run,
-                             windows: tuple[tuple[float, float], ...] = ((4.0, 5.0), (5.0, 6.0),
-                                                                         (9.0, 10.0),
-                                                                         (10.0, 11.0),
-                                                                         (14.0, 15.0)),
+                             windows: tuple[tuple[float, float], ...] | None = None,
                              ) -> list[dict]:
     """How far a disturbance moved the end effector and the CoM: per window ``[a, b]`` (s),
     the largest ``|y~[:3]_dist - y~[:3]_undist|`` and ``|x~_dist - x~_undist|`` (m) between a
-    run and the same run without its disturbances, sample by sample (docs/baselines.md)."""
+    run and the same run without its disturbances, sample by sample (docs/baselines.md).
+    ``windows``: by default :func:`displacement_windows` of the disturbed run's scenario."""
+    if windows is None:
+        windows = tuple(displacement_windows(disturbed.scenario))
     n = min(len(disturbed.t), len(undisturbed.t))
     t = disturbed.t[:n]
     if not np.array_equal(t, undisturbed.t[:n]):
@@ -164,7 +183,7 @@ def disturbance_displacement(disturbed: Run, undisturbed: Run,
     out = []
     for a, b in windows:
         mask = (t >= a) & (t <= b)
-        out.append({"window_s": [a, b],
+        out.append({"window_s": [float(a), float(b)],
                     "ee_moved_max_m": float(ee[mask].max()) if mask.any() else None,
                     "com_moved_max_m": float(com[mask].max()) if mask.any() else None})
     return out
@@ -172,24 +191,30 @@ def disturbance_displacement(disturbed: Run, undisturbed: Run,
 
 def cli_compare(args: argparse.Namespace) -> int:
     """``aerial-drake compare SCENARIO [--controllers A,B] [--jobs N] [--duration S]
-    [--out DIR] [--quiet] [--json]``."""
+    [--out DIR] [--quiet] [--json]``. Exit statuses as ``run``'s (docs/reliability.md): 2 bad
+    input or output folder, 3 results not written, 128 + n stopped by signal n, 1 a run
+    failed. With ``--json`` stdout holds only JSON (comparison.json's content, or an error
+    object); the table and the "wrote" lines go to stderr."""
     controllers = tuple(c.strip() for c in args.controllers.split(",") if c.strip())
     jobs = args.jobs if args.jobs is not None else min(len(controllers), os.cpu_count() or 1)
     try:
         result = run_compare(args.scenario, controllers, Path(args.out) / "compare",
                              args.duration, jobs=jobs, progress=not args.quiet,
                              stream=sys.stderr, undisturbed=args.undisturbed)
-    except (ScenarioError, UnreachablePose) as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
-    print(result.table)
+    except Exception as err:  # the foreseen ones get their status; a bug is raised again
+        return report_exception(args, err)
+    if result.interrupted is not None:
+        return report_error(args, 128 + result.interrupted, "; ".join(result.failures.values()),
+                            f"logs up to the interruption are in {result.out_dir}")
+    human = sys.stderr if args.json else sys.stdout
+    print(result.table, file=human)
     for path in result.figures:
         if path.suffix == ".png":
-            print(f"wrote {path} (and .pdf)")
-    print(f"wrote {result.out_dir / 'summary.txt'} and {result.out_dir / 'comparison.json'}")
+            print(f"wrote {path} (and .pdf)", file=human)
+    print(f"wrote {result.out_dir / 'summary.txt'} and {result.out_dir / 'comparison.json'}",
+          file=human)
     if args.json:
-        print(json.dumps(comparison_summary({n: r.metrics for n, r in result.runs.items()}),
-                         indent=2))
+        print(strict_json(comparison_summary({n: r.metrics for n, r in result.runs.items()})))
     for name, reason in result.failures.items():
         print(f"error: {name}: {reason}", file=sys.stderr)
     return 0 if result.completed else 1

@@ -1,11 +1,14 @@
 """How the command line reports an error: one line on stderr (no traceback), and with
-``--json`` a JSON error object on stdout. Here, below the command line, so that the study
-commands (aerial_drake.studies.paper.cli_run) report the same way."""
+``--json`` a JSON error object on stdout, and which exit status each error gets
+(:func:`exit_status_for`). Here, below the command line, so that the study commands
+(aerial_drake.studies.paper.cli_run, aerial_drake.studies.compare.cli_compare) report the
+same way. The standard library only: the command line imports this before anything else."""
 
 from __future__ import annotations
 
 import argparse
 import json
+import signal
 import sys
 
 
@@ -23,3 +26,43 @@ def report_error(args: argparse.Namespace, status: int, err: BaseException | str
                                     "field": getattr(err, "field", None),
                                     "message": message, "note": note}}, indent=2))
     return status
+
+
+#: The exit status of each error the command line expects, by the exception's class
+#: (``module.QualifiedName``; docs/reliability.md, "Exit statuses"). The classes are named, not
+#: imported, so that this module stays light; :func:`exit_status_for` walks the exception's
+#: classes from the most derived, so ResultsNotWritten (an OutputError) gets 3.
+EXIT_STATUSES = {
+    "aerial_drake.simulation.scenarios.checks.ScenarioError": 2,  # bad input
+    "aerial_drake.dynamics.equilibrium.UnreachablePose": 2,       # bad input (the start pose)
+    "aerial_drake.simulation.outputs.ResultsNotWritten": 3,       # results lost (a full disk)
+    "aerial_drake.simulation.outputs.OutputError": 2,             # the output folder
+    "aerial_drake.simulation.runner.SimulationFailed": 1,         # the run failed
+}
+#: Interruptions: 128 + the signal's number (``signum``; 130 for a bare KeyboardInterrupt).
+_INTERRUPTED = "aerial_drake.simulation.runner.SimulationInterrupted"
+
+
+def exit_status_for(err: BaseException) -> int | None:
+    """The command line's exit status for ``err``: 128 + n for an interruption by signal n
+    (SimulationInterrupted, a KeyboardInterrupt), else :data:`EXIT_STATUSES`' entry for its
+    class; None for an error not foreseen (a bug: the command line's catch-all)."""
+    if isinstance(err, KeyboardInterrupt):
+        return 128 + getattr(err, "signum", signal.SIGINT)
+    for cls in type(err).__mro__:
+        name = f"{cls.__module__}.{cls.__qualname__}"
+        if name == _INTERRUPTED:
+            return 128 + getattr(err, "signum", signal.SIGINT)
+        if name in EXIT_STATUSES:
+            return EXIT_STATUSES[name]
+    return None
+
+
+def report_exception(args: argparse.Namespace, err: BaseException,
+                     note: str | None = None) -> int:
+    """:func:`report_error` with :func:`exit_status_for`'s status; an error it does not know
+    is raised again (for the command line's catch-all)."""
+    status = exit_status_for(err)
+    if status is None:
+        raise err
+    return report_error(args, status, err, note)

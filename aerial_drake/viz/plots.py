@@ -153,11 +153,14 @@ DESIRED_COLORS = (DESIRED_COLOR, "tab:pink", "darkgoldenrod", "tab:gray")
 Series = tuple[Run, str, str]
 
 
-def series(runs: list[Run], labels: list[str] | None = None) -> list[Series]:
-    """Colour and label each of ``runs`` (labels default to the runs' names)."""
+def series(runs: list[Run], labels: list[str] | None = None,
+           colors: list[str] | None = None) -> list[Series]:
+    """Colour and label each of ``runs`` (labels default to the runs' names, colours to
+    :data:`RUN_COLORS` in order)."""
     labels = labels if labels is not None else [run.name for run in runs]
-    return [(run, RUN_COLORS[k % len(RUN_COLORS)], label)
-            for k, (run, label) in enumerate(zip(runs, labels))]
+    colors = colors if colors is not None else [RUN_COLORS[k % len(RUN_COLORS)]
+                                                for k in range(len(runs))]
+    return list(zip(runs, colors, labels))
 
 
 def _runs(nominal: Run, disturbed: Run | None) -> list[Series]:
@@ -355,12 +358,16 @@ def write_figures(out_dir: str | Path, nominal: Run, disturbed: Run | None = Non
         "fig5_orientation_errors": figure_orientation_errors(nominal, disturbed),
         "fig6_inputs": figure_inputs(nominal),
     }
+    return [p for name, fig in figures.items() for p in save_figure(fig, out, name, formats)]
+
+
+def save_figure(fig: Figure, out: Path, name: str, formats: tuple[str, ...]) -> list[Path]:
+    """Write ``fig`` as ``out/name.<format>`` for each of ``formats``; returns the files."""
     written = []
-    for name, fig in figures.items():
-        for fmt in formats:
-            path = out / f"{name}.{fmt}"
-            fig.savefig(path, format=fmt)
-            written.append(path)
+    for fmt in formats:
+        path = out / f"{name}.{fmt}"
+        fig.savefig(path, format=fmt)
+        written.append(path)
     return written
 
 

@@ -24,20 +24,12 @@ from aerial_drake.viz.plots import (
     figure_inputs,
     figure_orientation_errors,
     load_run,
+    save_figure,
     series,
 )
 
 #: Formats of the figures a run writes for itself (PNG: quick to write and to open).
 RUN_FORMATS = ("png",)
-
-
-def _save(fig, out: Path, name: str, formats: tuple[str, ...]) -> list[Path]:
-    written = []
-    for fmt in formats:
-        path = out / f"{name}.{fmt}"
-        fig.savefig(path, format=fmt)
-        written.append(path)
-    return written
 
 
 def write_run_figures(run_dir: str | Path, formats: tuple[str, ...] = RUN_FORMATS,
@@ -48,7 +40,7 @@ def write_run_figures(run_dir: str | Path, formats: tuple[str, ...] = RUN_FORMAT
     runs = series([run])
     figures = dict(zip(FIGURE_NAMES, (figure_end_effector(runs), figure_com(runs),
                                       figure_orientation_errors(runs), figure_inputs(run))))
-    return [p for name, fig in figures.items() for p in _save(fig, folder, name, formats)]
+    return [p for name, fig in figures.items() for p in save_figure(fig, folder, name, formats)]
 
 
 def run_labels(runs: list[Run], folders: list[Path]) -> list[str]:
@@ -75,8 +67,8 @@ def write_overlay(run_dirs: list[str | Path], out_dir: str | Path,
     written = []
     for name, figure in zip(FIGURE_NAMES[:3], (figure_end_effector, figure_com,
                                                figure_orientation_errors)):
-        written += _save(figure(overlaid), out, name, formats)
+        written += save_figure(figure(overlaid), out, name, formats)
     for run, label in zip(runs, labels):
-        written += _save(figure_inputs(run), out, f"{FIGURE_NAMES[3]}_{_file_label(label)}",
+        written += save_figure(figure_inputs(run), out, f"{FIGURE_NAMES[3]}_{_file_label(label)}",
                          formats)
     return written
