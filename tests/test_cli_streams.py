@@ -52,3 +52,13 @@ def test_scenarios_show_without_a_name_says_what_is_missing(capsys):
     assert cli.main(["scenarios", "show"]) == 2
     err = capsys.readouterr().err
     assert "needs a NAME" in err and "nominal" in err
+
+
+def test_json_stdout_of_run_paper_is_one_document(tmp_path, capsys):
+    status = cli.main(["run", "paper", "--out", str(tmp_path), "--json", *SHORT])
+    out, err = capsys.readouterr()
+    assert status == 0, err
+    runs = json.loads(out)  # no table, no "wrote ..." lines
+    assert set(runs) == {"nominal", "disturbed"}
+    assert all(m["simulated_time_s"] == 0.05 for m in runs.values())
+    assert "nominal" in err and "disturbed" in err  # the table, on stderr

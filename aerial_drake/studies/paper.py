@@ -380,7 +380,8 @@ def cli_run(args: argparse.Namespace, overrides: dict | None = None) -> int:
     """``aerial-drake run paper [--duration S] [--out DIR] [--seed N] [--quiet] [--json]``;
     ``overrides``: the options already turned into scenario fields (aerial_drake.cli)."""
     out = Path(args.out) / "paper"
-    print(f"running the paper's scenarios {PAPER_SCENARIOS} -> {out}", flush=True)
+    say = sys.stderr if args.json else sys.stdout  # with --json, stdout holds the JSON alone
+    print(f"running the paper's scenarios {PAPER_SCENARIOS} -> {out}", file=say, flush=True)
     try:
         result = run_paper(out, seed=getattr(args, "seed", None), progress=not args.quiet,
                            stream=sys.stderr, overrides=overrides)
@@ -390,12 +391,12 @@ def cli_run(args: argparse.Namespace, overrides: dict | None = None) -> int:
         reasons = "; ".join(result.failures.values())
         return report_error(args, 128 + result.interrupted, reasons,
                             f"logs up to the interruption are in {out}")
-    print(result.table)
+    print(result.table, file=say)
     for path in result.figures:
         if path.suffix == ".png":
-            print(f"wrote {path} (and .pdf)")
+            print(f"wrote {path} (and .pdf)", file=say)
     folders = ", ".join(str(out / n) for n in result.runs)
-    print(f"wrote {out / 'summary.txt'}; run folders {folders}")
+    print(f"wrote {out / 'summary.txt'}; run folders {folders}", file=say)
     if args.json:
         print(strict_json({n: r.metrics for n, r in result.runs.items()}))
     for name, reason in result.failures.items():
