@@ -459,8 +459,7 @@ def main(argv: list[str] | None = None) -> int:
         # One in the simulation is handled by the runner (logs written, exit 128 + signal);
         # this is one before it started (loading, compiling, solving the initial pose).
         return report_error(args, exit_status_of(err), f"interrupted ({str(err) or 'Ctrl-C'}) "
-                            "outside a simulation: results of runs that had finished are "
-                            "kept, nothing more was written")
+                            "outside the simulation; nothing more written")
     except Exception as err:  # a bug, or a fault not foreseen: one line unless --debug
         if args.debug:
             raise
