@@ -26,12 +26,12 @@ import signal
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, TextIO
+from typing import Any, Callable, TextIO
 
 import numpy as np
 
 from aerial_drake.dynamics.equilibrium import UnreachablePose
-from aerial_drake.simulation.interrupts import handling, signal_name
+from aerial_drake.simulation.interrupts import Interrupted, handling, signal_name
 from aerial_drake.simulation.metrics import saturated_after_key
 from aerial_drake.simulation.outputs import OutputError, strict_json, write_text_atomically
 from aerial_drake.simulation.runner import SimulationFailed, SimulationInterrupted, run_scenario
@@ -140,6 +140,14 @@ class Batch:
 #: In a worker process: the signal that stopped one of its runs (then it starts no other: a
 #: terminated worker finishes writing its logs, and must not take the next queued run).
 _worker_stopped: list[int] = []
+#: In a worker process: set by the parent when the batch stops, so that a worker that takes a
+#: queued run from the pool's queue afterwards does not start it (pool initializer).
+_worker_stop_event: Any = None
+
+
+def _init_worker(stop_event: Any) -> None:
+    global _worker_stop_event
+    _worker_stop_event = stop_event
 
 
 def _run_in_worker(rebuild: Callable[[str], Scenario], key: str,
@@ -148,11 +156,17 @@ def _run_in_worker(rebuild: Callable[[str], Scenario], key: str,
     (None, None). (A Scenario does not pickle, so the worker builds its own.)"""
     if _worker_stopped:
         return f"'{key}' not started: interrupted", _worker_stopped[0]
+    if _worker_stop_event is not None and _worker_stop_event.is_set():
+        return f"'{key}' not started: interrupted", signal.SIGTERM
     try:
-        run_scenario(rebuild(key), out_dir=folder, progress=False)
+        with handling():  # a signal before the simulation, too, stops the run cleanly
+            run_scenario(rebuild(key), out_dir=folder, progress=False)
     except SimulationInterrupted as err:
         _worker_stopped.append(err.signum)
         return str(err), err.signum
+    except Interrupted as err:  # before its simulation started: nothing written
+        _worker_stopped.append(err.signum)
+        return f"'{key}' not started: interrupted", err.signum
     except SimulationFailed as err:
         return str(err), None
     return None, None
@@ -231,8 +245,10 @@ def _run_pooled(batch: Batch, scenarios: dict[str, Scenario], folders: dict[str,
                 jobs: int, rebuild: Callable[[str], Scenario], say,
                 labels: dict[str, str]) -> None:
     workers = min(jobs, len(scenarios))
+    context = multiprocessing.get_context("spawn")
+    stop_event = context.Event()
     pool = concurrent.futures.ProcessPoolExecutor(
-        workers, mp_context=multiprocessing.get_context("spawn"))
+        workers, mp_context=context, initializer=_init_worker, initargs=(stop_event,))
     futures: dict[str, concurrent.futures.Future] = {}
     try:
         futures = {key: pool.submit(_run_in_worker, rebuild, key, str(folders[key]))
@@ -252,11 +268,13 @@ def _run_pooled(batch: Batch, scenarios: dict[str, Scenario], folders: dict[str,
     except KeyboardInterrupt as err:
         batch.interrupted = getattr(err, "signum", signal.SIGINT)
     except BaseException:
+        stop_event.set()
         _stop_pool(pool, futures)
         raise
     if batch.interrupted is None:
         pool.shutdown(wait=True)
     else:
+        stop_event.set()  # before the workers are stopped: none starts a queued run
         _stop_pool(pool, futures)
         for key, future in futures.items():
             if key in batch.failures:

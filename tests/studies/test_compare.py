@@ -130,20 +130,21 @@ def test_a_signal_stops_compare_before_the_next_controller(tmp_path, capsys, mon
 
 
 def test_a_signal_stops_the_process_pool(tmp_path):
-    """With --jobs 2 and three controllers: SIGTERM in this process while two workers run
+    """With --jobs 2 and three controllers: SIGTERM in this process once a worker runs
     cancels the third run and terminates the workers; nothing is left running."""
     folder = tmp_path / "nominal"
     started = [folder / n / ".lock" for n in ("uncoupled", "static_compensation")]
 
-    def signal_once_both_started():
-        deadline = time.monotonic() + 120
-        while not all(p.exists() for p in started) and time.monotonic() < deadline:
-            time.sleep(0.1)
-        time.sleep(1.0)
+    def signal_once_a_baseline_started():
+        # As soon as the first run holds its folder: the third (paper) can start only after
+        # a 15 s baseline run has finished, so it is certainly queued whatever the machine's
+        # speed. (The deadline only keeps a broken pool from hanging the suite.)
+        deadline = time.monotonic() + 900
+        while not any(p.exists() for p in started) and time.monotonic() < deadline:
+            time.sleep(0.02)
         _signal_self(signal.SIGTERM)
 
-    threading.Thread(target=signal_once_both_started, daemon=True).start()
-    begin = time.monotonic()
+    threading.Thread(target=signal_once_a_baseline_started, daemon=True).start()
     with interrupts.handling():  # as the command line: SIGTERM raises, not ends pytest
         try:
             result = dut.run_compare("nominal", ("uncoupled", "static_compensation", "paper"),
@@ -151,10 +152,13 @@ def test_a_signal_stops_the_process_pool(tmp_path):
         except KeyboardInterrupt:
             pytest.fail("the interruption escaped run_compare")
     assert result.interrupted == signal.SIGTERM and not result.completed
-    assert "not started" in result.failures["paper"]
-    assert not (folder / "paper").exists()
+    # The third run never completes: it is cancelled in the queue ("not started") or, when a
+    # worker had already taken it from the pool's queue as the stop arrived, interrupted there.
+    paper = result.failures["paper"]
+    assert "not started" in paper or "interrupted (SIGTERM)" in paper, paper
+    if (folder / "paper" / "metrics.json").exists():
+        assert not result.runs["paper"].metrics["completed"]
     assert multiprocessing.active_children() == []
-    assert time.monotonic() - begin < 100  # far less than the runs (15 s each, a baseline)
     for name in ("uncoupled", "static_compensation"):
         if (folder / name / "metrics.json").exists():  # the worker wrote its logs on SIGTERM
             assert not result.runs[name].metrics["completed"]
