@@ -65,11 +65,11 @@ def wait_for_browser(meshcat, *, timeout: float = WAIT_TIMEOUT_S, stream: TextIO
 
 def hold(meshcat, *, stream: TextIO | None = None, poll: float = 0.5) -> None:
     """Keep serving ``meshcat`` until Ctrl-C (KeyboardInterrupt, caught here)."""
-    if stream is not None:
-        stream.write("Meshcat: the finished run stays on the page (Open Controls > Animations "
-                     "replays it); Ctrl-C to stop\n")
-        stream.flush()
-    try:
+    try:  # the message inside: a Ctrl-C right after it is caught too
+        if stream is not None:
+            stream.write("Meshcat: the finished run stays on the page (Open Controls > "
+                         "Animations replays it); Ctrl-C to stop\n")
+            stream.flush()
         while True:
             time.sleep(poll)
     except KeyboardInterrupt:
