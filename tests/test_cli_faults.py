@@ -17,6 +17,7 @@ import pytest
 
 from aerial_drake import cli
 from aerial_drake.simulation import outputs, runner, scenarios
+from processes import signal_at_first_progress
 
 SIGNALS = [signal.SIGINT, signal.SIGTERM, signal.SIGHUP]
 SHORT = ["--duration", "1.5", "--quiet"]
@@ -244,19 +245,9 @@ def test_two_concurrent_runs_into_one_folder(tmp_path):
 
 def test_sigterm_from_outside_while_simulating(tmp_path):
     """A real SIGTERM from another process, sent when the run prints its first progress line."""
-    process = subprocess.Popen(_cli("--duration", "30", "--out", str(tmp_path)),
-                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    try:
-        for line in process.stdout:
-            if line.lstrip().startswith("t = "):  # the simulation is under way
-                process.send_signal(signal.SIGTERM)
-                break
-        output, _ = process.communicate(timeout=120)
-    finally:
-        if process.poll() is None:
-            process.kill()
-            process.wait()
-    assert process.returncode == 128 + signal.SIGTERM, output
+    status, output = signal_at_first_progress(_cli("--duration", "30", "--out", str(tmp_path)),
+                                              signal.SIGTERM)
+    assert status == 128 + signal.SIGTERM, output
     assert "interrupted (SIGTERM) at t = " in output and "Traceback" not in output
     assert result_set(tmp_path / "nominal") == "complete"
     metrics = json.loads((tmp_path / "nominal" / "metrics.json").read_text())

@@ -35,6 +35,7 @@ from aerial_drake.viz.screenshot import (
     replay_time_script,
     screenshot,
 )
+from processes import signal_at_first_progress
 
 DURATION = 0.3  # s
 #: Robot paths MeshcatVisualizer draws: /drake/visualizer/<model instance>/<body>.
@@ -243,21 +244,11 @@ def test_cli_meshcat_run_prints_url_writes_replay_and_exits(tmp_path):
 
 
 def test_ctrl_c_stops_cleanly_and_writes_what_was_logged(tmp_path):
-    process = subprocess.Popen(_cli("--duration", "30", "--record", "--out", str(tmp_path)),
-                               stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    try:
-        # Wait until it simulates: its first progress line (t = 1 s simulated), whatever
-        # the machine's speed (a fixed sleep raced the model's build).
-        for line in process.stdout:
-            if line.lstrip().startswith("t = "):
-                process.send_signal(signal.SIGINT)
-                break
-        output, _ = process.communicate(timeout=120)
-    finally:
-        if process.poll() is None:
-            process.kill()
-            process.wait()
-    assert process.returncode == 130, output
+    # Signalled at its first progress line (t = 1 s simulated), whatever the machine's speed
+    # (a fixed sleep raced the model's build).
+    status, output = signal_at_first_progress(
+        _cli("--duration", "30", "--record", "--out", str(tmp_path)), signal.SIGINT)
+    assert status == 130, output
     assert "interrupted (Ctrl-C)" in output
     out = tmp_path / "nominal"
     metrics = json.loads((out / "metrics.json").read_text())
