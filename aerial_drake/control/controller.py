@@ -26,7 +26,6 @@ from aerial_drake.control.compiled import (
     pack_gains,
 )
 from aerial_drake.control.law import (
-    DIAGNOSTICS_SIZE,
     F_D_LIMIT,
     SIGMA_MIN_J3_LIMIT,
     AssumptionViolation,
@@ -38,14 +37,16 @@ from aerial_drake.control.law import (
     assumption_1_message,
     assumption_2_message,
     compute_control,
+    diagnostics_size,
 )
 from aerial_drake.dynamics.decoupling import DecoupledDynamics, value_of
 from aerial_drake.dynamics.kinematic_tree import KinematicTree, UnsupportedTree
 from aerial_drake.robots.models import AerialManipulator
+from aerial_drake.robots.task import POSE_ROWS, TaskLayout
 from aerial_drake.trajectories.reference import (
     COM_REFERENCE_SIZE,
     HEADING_REFERENCE_SIZE,
-    TASK_REFERENCE_SIZE,
+    task_reference_size,
     unpack_com_reference,
     unpack_heading_reference,
     unpack_task_reference,
@@ -99,13 +100,13 @@ class _DecoupledControllerBase(_ControllerPorts):
 
     Input ports:
         - ``state``: the model plant's state ``[q; v]`` (its floating base, quaternion or rpy,
-          then 7 arm joints).
-        - ``com_reference`` (15), ``task_reference`` (27), ``heading_reference`` (9): as
+          then the n arm joints).
+        - ``com_reference`` (15), ``task_reference`` (24 + 3 n_j), ``heading_reference`` (9): as
           produced by :class:`aerial_drake.trajectories.generator.ReferenceGenerator`.
 
     Output ports:
         - ``command``: ``[f, mu (3), tau (n)]``, the inputs of (1).
-        - ``diagnostics``: see :data:`aerial_drake.control.law.DIAGNOSTICS_LAYOUT`.
+        - ``diagnostics``: see :func:`aerial_drake.control.law.diagnostics_layout`.
 
     With ``period`` 0 (continuous feedback, and what ``Linearize`` needs), both outputs come
     from one cached evaluation per context (direct feedthrough). With ``period`` > 0 (the
@@ -122,14 +123,14 @@ class _DecoupledControllerBase(_ControllerPorts):
             scalar type; usually ``models.make_plant("rigid").plant``), not the simulated
             plant. Scalar conversion converts it (``ToScalarType``).
         end_effector_frame: the task frame E on ``plant``.
-        q3_joint_velocity_index: index in v of the joint whose angle is the 7th task coordinate.
+        task: the task's rows and joints on ``plant`` (``AerialManipulator.task``).
         gains: Table II gains; validated here (a ValueError names a bad field).
         sigma_min_J3_limit, f_d_limit: thresholds of the Assumption 1 and 2 checks.
         period: the sampling period (s); 0 for continuous feedback.
     """
 
-    def _setup(self, plant: MultibodyPlant, end_effector_frame: Frame,
-               q3_joint_velocity_index: int, q3_joint_position_index: int, gains: Gains, *,
+    def _setup(self, plant: MultibodyPlant, end_effector_frame: Frame, task: TaskLayout,
+               gains: Gains, *,
                sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT, f_d_limit: float = F_D_LIMIT,
                period: float = 0.0):
         if not period >= 0.0:
@@ -140,25 +141,30 @@ class _DecoupledControllerBase(_ControllerPorts):
         self._dtype = float if isinstance(plant, MultibodyPlant) else object
         nv = plant.num_velocities()
         self._n = nv - 6
+        if task.n != self._n:
+            raise ValueError(f"the task has {task.n} rows but the plant has {self._n} arm "
+                             "velocities: the law needs as many task coordinates as joints")
+        self._task = task
+        self._diagnostics_size = diagnostics_size(self._n)
         self._K = GainMatrices.from_gains(gains, n_task=self._n)
         self._gravity = self._dynamics.gravity
         self._frame = end_effector_frame
-        self._q3_v = q3_joint_velocity_index
-        self._q3_q = q3_joint_position_index
         self._limits = dict(sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit)
         self._plant_context = plant.CreateDefaultContext()
         self._period = float(period)
         self.evaluations = 0  # number of control law evaluations (for tests and benchmarks)
+        self.not_compiled_reason = ""
         self._compiled = self._make_compiled(gains) if self._dtype is float else None
 
         nx = plant.num_positions() + nv
         self._state_port = self.DeclareVectorInputPort("state", nx)
         self._com_port = self.DeclareVectorInputPort("com_reference", COM_REFERENCE_SIZE)
-        self._task_port = self.DeclareVectorInputPort("task_reference", TASK_REFERENCE_SIZE)
+        self._task_port = self.DeclareVectorInputPort(
+            "task_reference", task_reference_size(task.n_joints))
         self._heading_port = self.DeclareVectorInputPort("heading_reference",
                                                          HEADING_REFERENCE_SIZE)
         if self._period > 0.0:
-            self._held = self._declare_held_outputs((4 + self._n, DIAGNOSTICS_SIZE),
+            self._held = self._declare_held_outputs((4 + self._n, self._diagnostics_size),
                                                     self._sample)
             return
         self._solution = self.DeclareCacheEntry(
@@ -170,19 +176,21 @@ class _DecoupledControllerBase(_ControllerPorts):
             "command", 4 + self._n, self._calc_command,
             prerequisites_of_calc={self._solution.ticket()})
         self.DeclareVectorOutputPort(
-            "diagnostics", DIAGNOSTICS_SIZE, self._calc_diagnostics,
+            "diagnostics", self._diagnostics_size, self._calc_diagnostics,
             prerequisites_of_calc={self._solution.ticket()})
 
     def _make_compiled(self, gains: Gains) -> CompiledLaw | None:
         """The compiled law (:mod:`aerial_drake.control.compiled`) on this plant, or None where its
-        kernels do not handle the plant's structure (then :meth:`solve` serves)."""
+        kernels do not handle the plant's structure (then :meth:`solve` serves, and
+        :attr:`not_compiled_reason` says why)."""
         try:
             tree = KinematicTree.from_plant(self._plant, self._dynamics.base_body)
-        except UnsupportedTree:
+        except UnsupportedTree as err:
+            self.not_compiled_reason = str(err)
             return None
         X_BE = self._frame.GetFixedPoseInBodyFrame()
         ee = (tree.index_of(self._frame.body()), X_BE.rotation().matrix(), X_BE.translation())
-        return CompiledLaw(tree, self._plant.num_positions(), ee, self._q3_q, self._q3_v,
+        return CompiledLaw(tree, self._plant.num_positions(), ee, self._task,
                            pack_gains(self._K, self._gravity), **self._limits)
 
     @property
@@ -202,7 +210,7 @@ class _DecoupledControllerBase(_ControllerPorts):
         if self._compiled is None:
             out = self.solve(x, com, task, heading)
             return np.concatenate([[out.f], out.mu, out.tau]), out.diagnostics
-        command, diagnostics = np.empty(4 + self._n), np.empty(DIAGNOSTICS_SIZE)
+        command, diagnostics = np.empty(4 + self._n), np.empty(self._diagnostics_size)
         self._evaluate_into(x, com, task, heading, command, diagnostics)
         return command, diagnostics
 
@@ -231,21 +239,17 @@ class _DecoupledControllerBase(_ControllerPorts):
         plant.SetPositionsAndVelocities(ctx, x)
         d = self._dynamics.compute(ctx)
         J6, J6_dot = self._dynamics.frame_jacobian(d, self._frame)
-        nv = plant.num_velocities()
-        J_y = np.zeros((7, nv), dtype=self._dtype)
-        J_y[:6] = J6
-        J_y[6, self._q3_v] = 1.0
-        J_y_dot = np.zeros((7, nv), dtype=self._dtype)
-        J_y_dot[:6] = J6_dot
+        J_y, J_y_dot = task_jacobian(self._task, J6, J6_dot, plant.num_velocities(),
+                                     self._dtype)
         X_WE = self._frame.CalcPoseInWorld(ctx)
+        rows = self._task.rows
         kin = TaskKinematics(p_WE=X_WE.translation(), R_WE=X_WE.rotation().matrix(),
-                             q3=x[self._q3_q], J_y=J_y, J_y_dot=J_y_dot)
+                             q_j=x[list(self._task.joint_positions)], J_y=J_y, J_y_dot=J_y_dot,
+                             rows=rows)
         t = unpack_task_reference(task)
         ref = Reference(
-            com=unpack_com_reference(com), p_ed=t.p_ed, R_ed=t.R_ed,
-            q3d=typing.cast(float, t.q3d),  # one instant: a scalar of the 1-D vector
-            y_d_dot=np.concatenate([t.v_ed, t.w_ed, [t.q3d_dot]]),
-            y_d_ddot=np.concatenate([t.a_ed, t.dw_ed, [t.q3d_ddot]]),
+            com=unpack_com_reference(com), p_ed=t.p_ed, R_ed=t.R_ed, q_jd=t.q_jd,
+            y_d_dot=t.full_dot[list(rows)], y_d_ddot=t.full_ddot[list(rows)],
             b1d=unpack_heading_reference(heading))
         self.evaluations += 1
         return compute_control(d, kin, ref, self._K, self._gravity, **self._limits)
@@ -311,6 +315,20 @@ class _DecoupledControllerBase(_ControllerPorts):
         output.SetFromVector(self._solution.Eval(context)[1])
 
 
+def task_jacobian(task: TaskLayout, J6: np.ndarray, J6_dot: np.ndarray, nv: int, dtype=float
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """J_y and its derivative: the task's rows of ``[J6; joint rows]``, J6 the end effector's
+    World Jacobian ``[v_E; w_E]`` (6, nv) (:mod:`aerial_drake.robots.task`)."""
+    J_y = np.zeros((task.n, nv), dtype=dtype)
+    J_y_dot = np.zeros((task.n, nv), dtype=dtype)
+    for i, r in enumerate(task.rows):
+        if r < POSE_ROWS:
+            J_y[i], J_y_dot[i] = J6[r], J6_dot[r]
+        else:
+            J_y[i, task.joint_velocities[r - POSE_ROWS]] = 1.0
+    return J_y, J_y_dot
+
+
 def _at_time(err: Exception, context: Context) -> Exception:
     """``err`` again, its message prefixed by the context's time."""
     return type(err)(f"t = {context.get_time():.4f} s: {err}")
@@ -334,19 +352,18 @@ def DecoupledController_(T):
     class Impl(_DecoupledControllerBase, LeafSystem_[T]):
         __doc__ = _DecoupledControllerBase.__doc__
 
-        def _construct(self, plant, end_effector_frame, q3_joint_velocity_index,
-                       q3_joint_position_index, gains, *,
+        def _construct(self, plant, end_effector_frame, task, gains, *,
                        sigma_min_J3_limit=SIGMA_MIN_J3_LIMIT, f_d_limit=F_D_LIMIT,
                        period=0.0, converter=None):
             LeafSystem_[T].__init__(self, converter)
-            self._setup(plant, end_effector_frame, q3_joint_velocity_index,
-                        q3_joint_position_index, gains, sigma_min_J3_limit=sigma_min_J3_limit,
+            self._setup(plant, end_effector_frame, task, gains,
+                        sigma_min_J3_limit=sigma_min_J3_limit,
                         f_d_limit=f_d_limit, period=period)
 
         def _construct_copy(self, other, converter=None):
             plant = other._plant.ToScalarType[T]()
-            Impl._construct(self, plant, plant.get_frame(other._frame.index()), other._q3_v,
-                            other._q3_q, other._gains, **other._limits, period=other._period,
+            Impl._construct(self, plant, plant.get_frame(other._frame.index()), other._task,
+                            other._gains, **other._limits, period=other._period,
                             converter=converter)
 
     return Impl
@@ -364,19 +381,19 @@ class ZeroController(_ControllerPorts, LeafSystem):
     every sample as the real controller does, so the reference is generated, and its outputs
     are a zero discrete state."""
 
-    def __init__(self, plant: MultibodyPlant, end_effector_frame: Frame,
-                 q3_joint_velocity_index: int, q3_joint_position_index: int, gains: Gains, *,
+    def __init__(self, plant: MultibodyPlant, end_effector_frame: Frame, task: TaskLayout,
+                 gains: Gains, *,
                  sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT, f_d_limit: float = F_D_LIMIT,
                  period: float = 0.0):
         super().__init__()
         nv = plant.num_velocities()
         self.evaluations = 0
         self._period = float(period)
-        self._sizes = (4 + nv - 6, DIAGNOSTICS_SIZE)
+        self._sizes = (4 + nv - 6, diagnostics_size(nv - 6))
         self._state_port = self.DeclareVectorInputPort(
             "state", plant.num_positions() + nv)
         self.DeclareVectorInputPort("com_reference", COM_REFERENCE_SIZE)
-        self.DeclareVectorInputPort("task_reference", TASK_REFERENCE_SIZE)
+        self.DeclareVectorInputPort("task_reference", task_reference_size(task.n_joints))
         self.DeclareVectorInputPort("heading_reference", HEADING_REFERENCE_SIZE)
         if self._period > 0.0:
             self._declare_held_outputs(self._sizes, self._sample)
@@ -407,11 +424,11 @@ class ZeroController(_ControllerPorts, LeafSystem):
 def make_controller(model: AerialManipulator, gains: Gains, *,
                     sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT,
                     f_d_limit: float = F_D_LIMIT, period: float = 0.0, zero: bool = False):
-    """The controller on ``model`` (from :mod:`aerial_drake.robots.models`), its task's q3 being the
-    arm's third joint, sampled every ``period`` s (0: continuous); ``zero=True`` gives the
+    """The controller on ``model`` (from :mod:`aerial_drake.robots.models`) and its task,
+    sampled every ``period`` s (0: continuous); ``zero=True`` gives the
     :class:`ZeroController` baseline instead."""
     controller_type = ZeroController if zero else DecoupledController
-    q3 = model.arm_joints[2]
+    assert model.task is not None  # a finalized model
     return controller_type(
-        model.plant, model.end_effector_frame, q3.velocity_start(), q3.position_start(), gains,
+        model.plant, model.end_effector_frame, model.task, gains,
         sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit, period=period)

@@ -6,8 +6,9 @@ diagnostics. :mod:`aerial_drake.control.controller` wraps it in a LeafSystem.
 
 Choices where the paper is silent (also in ``docs/control.md``):
 
-- The task is ``y = [p_E; orientation of E; q3]`` (27). Its velocity is
-  ``y_dot = [v_E; w_E; q3_dot]`` (World) and its orientation error is
+- The task is rows of ``y_full = [p_E; orientation of E; q_j]`` (the paper's (27) is all of
+  them with q_j = q3; :mod:`aerial_drake.robots.task`). Its velocity is rows of
+  ``[v_E; w_E; q_j_dot]`` (World) and its orientation error is
   ``e_o = vee(skew(R_E R_ed^T))`` (World), whose derivative at zero error is ``w_E - w_ed``.
   The task velocity error is velocity-level, ``J xi - y_d_dot`` (17).
 - The feed-forwards take the CoM acceleration and jerk from the model (9a) and the base angular
@@ -48,7 +49,8 @@ class Gains:
     k_w: float = float("nan")
     # Desired closed-loop attitude inertia Lambda_2 bar, diagonal (kg m^2).
     Lambda2_bar: list[float] = field(default_factory=list)
-    # Task error gain K_y, diagonal (1/s): 3 position, 3 orientation, then the q3 entry.
+    # Task error gain K_y, diagonal (1/s), one entry per task row in the robot's task order
+    # (the paper's: 3 position, 3 orientation, then q3).
     K_y: list[float] = field(default_factory=list)
     # Task velocity gain K_z, diagonal.
     K_z: list[float] = field(default_factory=list)
@@ -59,7 +61,7 @@ class Gains:
     lyapunov_gamma1: float = 20.0
     lyapunov_gamma2: float = 0.4
 
-    def validate(self, n_task: int = 7, prefix: str = "gains") -> "Gains":
+    def validate(self, n_task: int, prefix: str = "gains") -> "Gains":
         """Raise ValueError naming the field if a gain is missing, of the wrong size, or not
         positive definite. Returns self."""
         sizes = {"K_x": 3, "D_x": 3, "Lambda2_bar": 3, "K_y": n_task, "K_z": n_task}
@@ -103,13 +105,15 @@ def assumption_2_message(f_d_norm: float, limit: float) -> str:
 
 @dataclass(frozen=True)
 class TaskKinematics:
-    """The task ``y`` at one state: end-effector pose, ``q3``, and ``y_dot = J_y v``."""
+    """The task ``y`` at one state: end-effector pose, the task's joint angles, and
+    ``y_dot = J_y v``."""
 
     p_WE: np.ndarray  # (3)
     R_WE: np.ndarray  # (3, 3)
-    q3: float
-    J_y: np.ndarray  # (7, nv): rows [v_E (World); w_E (World); q3_dot]
+    q_j: np.ndarray  # (n_j) the task's joint angles
+    J_y: np.ndarray  # (n, nv): the task's rows of [v_E (World); w_E (World); q_j_dot]
     J_y_dot: np.ndarray
+    rows: tuple[int, ...]  # the task's rows of y_full (robots.task)
 
 
 @dataclass(frozen=True)
@@ -119,33 +123,39 @@ class Reference:
     com: np.ndarray  # (5, 3): x_d and its first four derivatives
     p_ed: np.ndarray
     R_ed: np.ndarray
-    q3d: float
-    y_d_dot: np.ndarray  # (7): [v_ed; w_ed; q3d_dot]
-    y_d_ddot: np.ndarray  # (7): [a_ed; dw_ed; q3d_ddot]
+    q_jd: np.ndarray  # (n_j)
+    y_d_dot: np.ndarray  # (n): the task's rows of [v_ed; w_ed; q_jd_dot]
+    y_d_ddot: np.ndarray  # (n): the task's rows of [a_ed; dw_ed; q_jd_ddot]
     b1d: np.ndarray  # (3, 3): b1d and its first two derivatives
 
 
-# Diagnostics layout (name, size); n = 7 task coordinates.
-DIAGNOSTICS_LAYOUT: tuple[tuple[str, int], ...] = (
-    ("x_tilde", 3), ("x_tilde_dot", 3), ("e_R", 3), ("w_tilde", 3), ("y_tilde", 7),
-    ("z_tilde", 7), ("sigma_min_J3", 1), ("f_d_norm", 1), ("V1", 1), ("V_task", 1), ("V", 1),
-    ("com_error", 1), ("base_attitude_error", 1), ("ee_position_error", 1),
-    ("ee_orientation_error", 1), ("thrust_residual", 2),
-)
+def diagnostics_layout(n: int) -> tuple[tuple[str, int], ...]:
+    """The diagnostics vector's layout, (name, size) pairs, for a task of ``n`` rows.
+    ``ee_position_error`` and ``ee_orientation_error`` are of the whole end-effector pose
+    (whatever rows the task tracks)."""
+    return (
+        ("x_tilde", 3), ("x_tilde_dot", 3), ("e_R", 3), ("w_tilde", 3), ("y_tilde", n),
+        ("z_tilde", n), ("sigma_min_J3", 1), ("f_d_norm", 1), ("V1", 1), ("V_task", 1),
+        ("V", 1), ("com_error", 1), ("base_attitude_error", 1), ("ee_position_error", 1),
+        ("ee_orientation_error", 1), ("thrust_residual", 2),
+    )
 
 
-def diagnostics_slices(layout: tuple[tuple[str, int], ...] = DIAGNOSTICS_LAYOUT
+def diagnostics_slices(layout: "int | tuple[tuple[str, int], ...] | list"
                        ) -> dict[str, slice]:
-    """Name -> slice into the diagnostics vector, for ``layout`` ((name, size) pairs; by
-    default this version's, or e.g. the one stored in a log)."""
+    """Name -> slice into the diagnostics vector, for a task of ``layout`` rows or for a
+    ``layout`` of (name, size) pairs (e.g. the one stored in a log)."""
+    pairs = diagnostics_layout(layout) if isinstance(layout, int) else layout
     out, start = {}, 0
-    for name, size in layout:
+    for name, size in pairs:
         out[name] = slice(start, start + size)
         start += size
     return out
 
 
-DIAGNOSTICS_SIZE = sum(size for _, size in DIAGNOSTICS_LAYOUT)
+def diagnostics_size(n: int) -> int:
+    """Length of the diagnostics vector for a task of ``n`` rows."""
+    return sum(size for _, size in diagnostics_layout(n))
 
 
 @dataclass(frozen=True)
@@ -153,7 +163,7 @@ class ControlOutput:
     f: float  # thrust along the body z axis (N)
     mu: np.ndarray  # body torques (N m), base frame
     tau: np.ndarray  # joint torques (N m)
-    diagnostics: np.ndarray  # DIAGNOSTICS_LAYOUT
+    diagnostics: np.ndarray  # diagnostics_layout(n)
     # Intermediate quantities, for analysis and tests.
     u_prime: np.ndarray  # u' of (8)
     R_d: np.ndarray
@@ -227,13 +237,14 @@ def rotation_angle(R: np.ndarray) -> float:
     return float(np.arccos(np.clip(0.5 * (np.trace(R) - 1.0), -1.0, 1.0)))
 
 
-def task_error(p_WE: np.ndarray, R_WE: np.ndarray, q3, p_ed: np.ndarray, R_ed: np.ndarray,
-               q3d) -> tuple[np.ndarray, np.ndarray]:
-    """The task error y~ of (17)-(18) and ``R_E R_ed^T``: ``[p_E - p_ed; vee(skew(R_E
-    R_ed^T)); q3 - q3d]`` (World). Every controller's diagnostics use this definition
-    (:mod:`aerial_drake.control.interface`)."""
+def task_error(p_WE: np.ndarray, R_WE: np.ndarray, q_j, p_ed: np.ndarray, R_ed: np.ndarray,
+               q_jd, rows) -> tuple[np.ndarray, np.ndarray]:
+    """The task error y~ of (17)-(18) and ``R_E R_ed^T``: the task's ``rows`` of
+    ``[p_E - p_ed; vee(skew(R_E R_ed^T)); q_j - q_jd]`` (World). Every controller's
+    diagnostics use this definition (:mod:`aerial_drake.control.interface`)."""
     R_err = R_WE @ R_ed.T
-    return np.concatenate([p_WE - p_ed, vee(R_err), [q3 - q3d]]), R_err
+    full = np.concatenate([p_WE - p_ed, vee(R_err), np.asarray(q_j) - np.asarray(q_jd)])
+    return full[list(rows)], R_err
 
 
 def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "GainMatrices",
@@ -292,12 +303,13 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
     J1, J2, J3 = J[:, :3], J[:, 3:6], J[:, 6:]
     J1_dot, J2_dot, J3_dot = J_dot[:, :3], J_dot[:, 3:6], J_dot[:, 6:]
     J3_value = value_of(J3)
-    # sigma_min from the smallest eigenvalue of J3^T J3 (a symmetric 7x7: cheaper than an SVD;
+    # sigma_min from the smallest eigenvalue of J3^T J3 (a symmetric n x n: cheaper than an SVD;
     # accurate to ~1e-16 sigma_max^2 / sigma_min, far below the check's threshold).
     sigma_min = float(np.sqrt(max(np.linalg.eigvalsh(J3_value.T @ J3_value)[0], 0.0)))
     if not sigma_min > sigma_min_J3_limit:
         raise AssumptionViolation(assumption_1_message(sigma_min, sigma_min_J3_limit))
-    y_t, R_err = task_error(task.p_WE, task.R_WE, task.q3, ref.p_ed, ref.R_ed, ref.q3d)
+    y_t, R_err = task_error(task.p_WE, task.R_WE, task.q_j, ref.p_ed, ref.R_ed, ref.q_jd,
+                            task.rows)
     y_t_dot = J @ xi - ref.y_d_dot  # (17)
     z = J3 @ rho
     z_d = ref.y_d_dot - J1 @ xg_dot - J2 @ w_b - K.K_y * y_t
@@ -326,7 +338,7 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
         x_t, x_t_dot, e_R, w_t, y_t, z_t,
         [sigma_min, f_d_norm, V1, V_task, V1 + V_task,
          np.linalg.norm(value_of(x_t)), rotation_angle(R_d.T @ R),
-         np.linalg.norm(value_of(y_t[:3])),
+         np.linalg.norm(value_of(task.p_WE - ref.p_ed)),
          rotation_angle(R_err)],
         force_b[:2]])
     f = force_b[2] if force_b.dtype == object else float(force_b[2])
@@ -351,7 +363,7 @@ class GainMatrices:
     gamma2: float
 
     @classmethod
-    def from_gains(cls, gains: Gains, n_task: int = 7) -> "GainMatrices":
+    def from_gains(cls, gains: Gains, n_task: int) -> "GainMatrices":
         gains = dataclasses.replace(gains).validate(n_task)
         L2 = np.asarray(gains.Lambda2_bar, dtype=float)
         return cls(K_x=np.asarray(gains.K_x, float), D_x=np.asarray(gains.D_x, float),

@@ -6,25 +6,30 @@ import numpy as np
 from pydrake.systems.framework import BasicVector, Context, Diagram, DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import Demultiplexer
 
-from aerial_drake.trajectories.paper import TrajectoryParams, _Constants, _fill_reference
+from aerial_drake.trajectories.paper import (
+    _N_CONSTANTS,
+    TrajectoryParams,
+    _fill_reference,
+    constants,
+)
 from aerial_drake.trajectories.reference import (
-    _TOTAL_SIZE,
     COM_REFERENCE_SIZE,
     HEADING_REFERENCE_SIZE,
-    TASK_REFERENCE_SIZE,
+    packed_reference_size,
+    task_reference_size,
 )
 
 __all__ = ["ReferenceGenerator"]
 
 
 class _PackedReference(LeafSystem):
-    """The concatenation [com, task, heading] (51) at the context time: one output, so one
+    """The concatenation [com, task, heading] at the context time: one output, so one
     Python call per time; :class:`ReferenceGenerator` splits it in C++."""
 
-    def __init__(self, constants: np.ndarray):
+    def __init__(self, constants: np.ndarray, size: int):
         super().__init__()
         self._constants = constants
-        self.DeclareVectorOutputPort("references", _TOTAL_SIZE, self._calc,
+        self.DeclareVectorOutputPort("references", size, self._calc,
                                      prerequisites_of_calc={self.time_ticket()})
 
     def _calc(self, context: Context, output: BasicVector) -> None:
@@ -34,8 +39,12 @@ class _PackedReference(LeafSystem):
 class ReferenceGenerator(Diagram):
     """The reference trajectory (28)-(33) as a Drake source: no state, no inputs.
 
-    Output ports (functions of the context's time only; layouts in the module docstring):
-    ``com_reference`` (15), ``task_reference`` (27), ``heading_reference`` (9).
+    Output ports (functions of the context's time only; layouts in
+    :mod:`aerial_drake.trajectories.reference`): ``com_reference`` (15), ``task_reference``
+    (24 + 3 n_j: 27 for the paper's task), ``heading_reference`` (9).
+
+    ``joint_defaults``: the desired angles of the task's joint components when the
+    parameters' ``joint_targets`` is empty (the robot's nominal posture there).
 
     A small Diagram: the three are computed together, once per time, by one compiled call in
     a LeafSystem with a single output, and Drake's Demultiplexer splits them. The controller
@@ -46,15 +55,16 @@ class ReferenceGenerator(Diagram):
     linearise a diagram about a hover point with a ConstantVectorSource in its place.
     """
 
-    def __init__(self, params: TrajectoryParams):
+    def __init__(self, params: TrajectoryParams, joint_defaults=None):
         super().__init__()
-        params.validate()
+        k = constants(params, joint_defaults)
         self._params = copy.deepcopy(params)
+        self.n_joints = k.size - _N_CONSTANTS
         builder = DiagramBuilder()
-        packed = builder.AddSystem(_PackedReference(_Constants.from_params(params).as_array()))
+        packed = builder.AddSystem(_PackedReference(k, packed_reference_size(self.n_joints)))
         packed.set_name("packed_reference")
-        split = builder.AddSystem(
-            Demultiplexer([COM_REFERENCE_SIZE, TASK_REFERENCE_SIZE, HEADING_REFERENCE_SIZE]))
+        split = builder.AddSystem(Demultiplexer(
+            [COM_REFERENCE_SIZE, task_reference_size(self.n_joints), HEADING_REFERENCE_SIZE]))
         split.set_name("split_reference")
         builder.Connect(packed.get_output_port(), split.get_input_port())
         names = ("com_reference", "task_reference", "heading_reference")

@@ -1,12 +1,12 @@
 """The paper's reference trajectory (Section IV-A, eqs (27)-(33)): pure math and a Drake system.
 
-The end-effector task (27) is y_d = [x_ed; R_ed; q3d], with::
+The end-effector task (27) is y_d = [x_ed; R_ed; q_jd], with::
 
     x_ed(t) = center + A_b basic(t) + A_a agile(t)                                   (28)
         basic(t) = [-sin(w_b t), -cos(w_b t), sin(w_b t) + c t]
         agile(t) = [ sin(w_a t),  cos(w_a t), cos(w_a t)]
     R_ed(t)  = R1(phi1) R2(phi2) R3(phi3)   (R1 = RotX, R2 = RotY, R3 = RotZ)        (29)
-    q3d(t)   = q3_desired                                                           (30)
+    q_jd(t)  = joint_targets  (the task's joint components; the paper's q3d)        (30)
         phi1 = a1 sin(w_o t),  phi2 = a2 cos(w_o t),  phi3 = a3 cos(w_o t)          (31)
     b1d(t)   = [cos phi4, sin phi4, 0],  phi4 = phi4_0 + w_h t                      (32)
     x_d(t)   = x_c(t) + R3(phi4) r_o,  x_c(t) = center + A_b basic(t)               (33)
@@ -36,23 +36,12 @@ import numba
 import numpy as np
 
 from aerial_drake.trajectories.reference import (
-    _COM,
-    _HEADING,
-    _TASK,
-    _TASK_A,
-    _TASK_DW,
-    _TASK_P,
-    _TASK_Q3,
-    _TASK_Q3_DDOT,
-    _TASK_Q3_DOT,
-    _TASK_R,
-    _TASK_V,
-    _TASK_W,
-    _TOTAL_SIZE,
     ReferenceSample,
+    packed_reference_size,
+    packed_slices,
 )
 
-__all__ = ["TrajectoryParams", "evaluate_reference", "sample_reference", "compile_reference"]
+__all__ = ["TrajectoryParams", "constants", "evaluate_reference", "sample_reference", "compile_reference"]
 
 
 @dataclasses.dataclass
@@ -81,8 +70,9 @@ class TrajectoryParams:
     )
     # Angular frequency w_o of the orientation angles (rad/s).
     orientation_frequency: float = 3.0
-    # Desired angle of the arm's third joint, q3d (rad).
-    q3_desired: float = 0.0
+    # Desired angles of the task's joint components, in task order (rad): [q3d] for the
+    # paper's task (30). Empty: each at the robot's nominal posture.
+    joint_targets: typing.List[float] = dataclasses.field(default_factory=list)
     # Initial helicopter heading phi4_0 (rad).
     heading_initial: float = 0.0
     # Heading rate w_h, phi4 = phi4_0 + w_h t (rad/s); either sign.
@@ -123,7 +113,6 @@ class TrajectoryParams:
             "agile_amplitude",
             "agile_frequency",
             "orientation_frequency",
-            "q3_desired",
             "heading_initial",
             "heading_rate",
         ):
@@ -132,6 +121,9 @@ class TrajectoryParams:
                 errors.append(f"'{name}' must be a finite float, got {value!r}")
             elif name.endswith(("_amplitude", "_frequency")) and value < 0:
                 errors.append(f"'{name}' must be >= 0, got {value!r}: use its magnitude")
+        if not all(_is_finite_number(x) for x in self.joint_targets):
+            errors.append(f"'joint_targets' must hold finite angles (rad), got "
+                          f"{self.joint_targets!r}")
         if errors:
             raise ValueError("Invalid TrajectoryParams: " + "; ".join(errors) + ".")
 
@@ -141,31 +133,54 @@ def _is_finite_number(x) -> bool:
 
 
 
-def evaluate_reference(params: TrajectoryParams, t: float) -> ReferenceSample:
-    """The reference and its analytic derivatives at time t (s)."""
+def _joint_targets(params: TrajectoryParams, defaults) -> np.ndarray:
+    """The desired joint angles: the scenario's, else ``defaults`` (the robot's nominal
+    posture at the task's joints), else the paper's one q3d = 0."""
+    if params.joint_targets:
+        return np.asarray(params.joint_targets, dtype=float)
+    return np.zeros(1) if defaults is None else np.asarray(defaults, dtype=float)
+
+
+def constants(params: TrajectoryParams, joint_defaults=None) -> np.ndarray:
+    """The constants array the compiled formulas read: :class:`_Constants` then the joint
+    targets (see :func:`_joint_targets` for ``joint_defaults``)."""
     params.validate()
-    packed = np.empty(_TOTAL_SIZE)
-    _fill_reference(_Constants.from_params(params).as_array(), float(t), packed)
-    return ReferenceSample.from_vectors(packed[_COM], packed[_TASK], packed[_HEADING])
+    return np.concatenate([_Constants.from_params(params).as_array(),
+                           _joint_targets(params, joint_defaults)])
 
 
-def sample_reference(params: TrajectoryParams, times: np.ndarray) -> ReferenceSample:
+def evaluate_reference(params: TrajectoryParams, t: float, joint_defaults=None
+                       ) -> ReferenceSample:
+    """The reference and its analytic derivatives at time t (s)."""
+    k = constants(params, joint_defaults)
+    n_joints = k.size - _N_CONSTANTS
+    packed = np.empty(packed_reference_size(n_joints))
+    _fill_reference(k, float(t), packed)
+    com, task, heading = packed_slices(n_joints)
+    return ReferenceSample.from_vectors(packed[com], packed[task], packed[heading])
+
+
+def sample_reference(params: TrajectoryParams, times: np.ndarray, joint_defaults=None
+                     ) -> ReferenceSample:
     """:func:`evaluate_reference` over a 1-D array of N times, vectorised.
 
     Every field of the result has a leading time axis of length N (e.g. com is (N, 5, 3),
-    R_ed is (N, 3, 3), q3d is (N,)).
+    R_ed is (N, 3, 3), q_jd is (N, n_j)).
     """
-    params.validate()
+    k = constants(params, joint_defaults)
     times = np.asarray(times, dtype=float)
     if times.ndim != 1:
         raise ValueError(f"times must be a 1-D array, got shape {times.shape}")
-    packed = np.empty((times.size, _TOTAL_SIZE))
-    _fill_reference_over_time(_Constants.from_params(params).as_array(), times, packed)
-    return ReferenceSample.from_vectors(packed[:, _COM], packed[:, _TASK], packed[:, _HEADING])
+    n_joints = k.size - _N_CONSTANTS
+    packed = np.empty((times.size, packed_reference_size(n_joints)))
+    _fill_reference_over_time(k, times, packed)
+    com, task, heading = packed_slices(n_joints)
+    return ReferenceSample.from_vectors(packed[:, com], packed[:, task], packed[:, heading])
 
 
 class _Constants(typing.NamedTuple):
-    """The parameters as plain floats, in the order the formulas use them."""
+    """The parameters as plain floats, in the order the formulas use them (the joint
+    targets follow them in the compiled code's array)."""
 
     cx: float
     cy: float
@@ -179,7 +194,6 @@ class _Constants(typing.NamedTuple):
     a2: float
     a3: float
     w_o: float
-    q3: float
     phi4_0: float
     w_h: float
     rx: float
@@ -197,7 +211,6 @@ class _Constants(typing.NamedTuple):
             float(p.agile_frequency),
             *map(float, p.orientation_amplitudes),
             float(p.orientation_frequency),
-            float(p.q3_desired),
             float(p.heading_initial),
             float(p.heading_rate),
             *map(float, p.com_offset),
@@ -206,6 +219,9 @@ class _Constants(typing.NamedTuple):
     def as_array(self) -> np.ndarray:
         """The constants as a float array, in field order (what the compiled code reads)."""
         return np.array(self, dtype=float)
+
+
+_N_CONSTANTS = len(_Constants._fields)
 
 
 @numba.njit(cache=True)
@@ -238,13 +254,18 @@ def _cos_derivatives(s, c, w: float, amplitude: float = 1.0) -> tuple:
 # the generator evaluates it at every controller sample, where interpreted it cost about 30 us.
 @numba.njit(cache=True)
 def _fill_reference(k: np.ndarray, t: float, out: np.ndarray) -> None:
-    """The concatenation [com (15), task (27), heading (9)] at time t, written into ``out``.
+    """The concatenation [com (15), task (24 + 3 n_j), heading (9)] at time t, written
+    into ``out``.
 
-    ``k`` holds the :class:`_Constants` in their order (a float array).
+    ``k`` holds the :class:`_Constants` in their order, then the n_j joint targets.
     """
     cx, cy, cz, A_b, w_b, climb_rate = k[0], k[1], k[2], k[3], k[4], k[5]
     A_a, w_a, a1, a2, a3, w_o = k[6], k[7], k[8], k[9], k[10], k[11]
-    q3, phi4_0, w_h, rx, ry, rz = k[12], k[13], k[14], k[15], k[16], k[17]
+    phi4_0, w_h, rx, ry, rz = k[12], k[13], k[14], k[15], k[16]
+    nj = k.shape[0] - 17
+    # Offsets of the task reference (reference.TaskReferenceLayout.of(nj)).
+    P, R, Q, V = 0, 3, 12, 12 + nj
+    W, QD, A, DW, QDD = 15 + nj, 18 + nj, 18 + 2 * nj, 21 + 2 * nj, 24 + 2 * nj
     sin, cos = math.sin, math.cos
 
     # (28) basic motion x_c = center + A_b [-sin(w_b t), -cos(w_b t), sin(w_b t) + c t].
@@ -266,7 +287,8 @@ def _fill_reference(k: np.ndarray, t: float, out: np.ndarray) -> None:
     ch = _cos_derivatives(s4, c4, w_h)
 
     # (33) x_d = x_c + R3(phi4) r_o; the k-th derivative of R3(phi4) r_o rotates only its xy part.
-    com, task, heading = out[_COM], out[_TASK], out[_HEADING]
+    task_end = 15 + 24 + 3 * nj
+    com, task, heading = out[:15], out[15:task_end], out[task_end:task_end + 9]
     for n in range(5):
         com[3 * n] = x_c[n, 0] + ch[n] * rx - sh[n] * ry
         com[3 * n + 1] = x_c[n, 1] + sh[n] * rx + ch[n] * ry
@@ -278,7 +300,7 @@ def _fill_reference(k: np.ndarray, t: float, out: np.ndarray) -> None:
     s_a, c_a = sin(angle), cos(angle)
     sa = _sin_derivatives(s_a, c_a, w_a, A_a)
     ca = _cos_derivatives(s_a, c_a, w_a, A_a)
-    for n, start in enumerate((_TASK_P.start, _TASK_V.start, _TASK_A.start)):
+    for n, start in enumerate((P, V, A)):
         task[start] = x_c[n, 0] + sa[n]
         task[start + 1] = x_c[n, 1] + ca[n]
         task[start + 2] = x_c[n, 2] + ca[n]
@@ -300,7 +322,7 @@ def _fill_reference(k: np.ndarray, t: float, out: np.ndarray) -> None:
         -c1 * s2 * c3 + s1 * s3, c1 * s2 * s3 + s1 * c3, c1 * c2,
     )  # fmt: skip
     for i in range(9):
-        task[_TASK_R.start + i] = R_ed[i]
+        task[R + i] = R_ed[i]
 
     # w_ed = phi1' e1 + phi2' b + phi3' c with the World axes e1, b = R1 e2, c = R1 R2 e3.
     # Differentiating, e1' = 0, b' = (phi1' e1) x b, c' = (phi1' e1 + phi2' b) x c, so
@@ -323,13 +345,14 @@ def _fill_reference(k: np.ndarray, t: float, out: np.ndarray) -> None:
         dd2 * b[2] + dd3 * c[2] + d1 * d2 * e1_x_b[2] + d3 * w_12_x_c[2],
     )
     for i in range(3):
-        task[_TASK_W.start + i] = w_ed[i]
-        task[_TASK_DW.start + i] = dw_ed[i]
+        task[W + i] = w_ed[i]
+        task[DW + i] = dw_ed[i]
 
-    # (30) q3d constant.
-    task[_TASK_Q3] = q3
-    task[_TASK_Q3_DOT] = 0.0
-    task[_TASK_Q3_DDOT] = 0.0
+    # (30) the joint targets constant.
+    for i in range(nj):
+        task[Q + i] = k[17 + i]
+        task[QD + i] = 0.0
+        task[QDD + i] = 0.0
 
     # (32) [b1d, b1d', b1d''].
     for n in range(3):
@@ -340,7 +363,7 @@ def _fill_reference(k: np.ndarray, t: float, out: np.ndarray) -> None:
 
 @numba.njit(cache=True)
 def _fill_reference_over_time(k: np.ndarray, times: np.ndarray, out: np.ndarray) -> None:
-    """:func:`_fill_reference` at each of the N ``times``, into the rows of ``out`` (N, 51)."""
+    """:func:`_fill_reference` at each of the N ``times``, into the rows of ``out`` (N, 48 + 3 n_j)."""
     for i in range(times.size):
         _fill_reference(k, times[i], out[i])
 

@@ -5,17 +5,21 @@ Frames and units: every vector is expressed in World (m, m/s, rad, rad/s, ...). 
 velocity of the desired end-effector frame satisfies d/dt R_ed = hat(w_ed) R_ed, and
 dw_ed = d/dt w_ed (both in World).
 
+The task reference always holds the whole desired end-effector pose and the desired angles of
+the task's joint components (``n_j`` of them: 1 for the paper's q3, 0 for a pose-only task);
+the controller picks the rows its task uses (:mod:`aerial_drake.robots.task`).
+
 Packed vectors (the three output ports of
 :class:`~aerial_drake.trajectories.generator.ReferenceGenerator`; use the ``pack_*`` /
 ``unpack_*`` helpers or :meth:`ReferenceSample.to_vectors` / :meth:`ReferenceSample.from_vectors`
 rather than offsets):
 
-- com reference, ``COM_REFERENCE_SIZE`` = 15: [x_d, x_d', x_d'', x_d''', x_d''''] (3 each).
-- task reference, ``TASK_REFERENCE_SIZE`` = 27:
-  [p_ed (3), R_ed row-major (9), q3d (1), v_ed (3), w_ed (3), q3d_dot (1),
-  a_ed (3), dw_ed (3), q3d_ddot (1)].
-  Its three blocks of 13 / 7 / 7 are y_d, y_d_dot and y_d_ddot of (27) (the SO(3) part at
-  velocity level given as w_ed, dw_ed).
+- com reference, ``COM_REFERENCE_SIZE`` = 15: [x_d and its 1st..4th derivatives] (3 each).
+- task reference, :func:`task_reference_size` ``(n_j)`` = 24 + 3 n_j (27 for the paper):
+  [p_ed (3), R_ed row-major (9), q_jd (n_j), v_ed (3), w_ed (3), q_jd_dot (n_j),
+  a_ed (3), dw_ed (3), q_jd_ddot (n_j)]. Its three blocks are y_d, y_d_dot and y_d_ddot of
+  (27) for the full task [p_E; orientation; q_j] (the SO(3) part at velocity level given as
+  w_ed, dw_ed).
 - heading reference, ``HEADING_REFERENCE_SIZE`` = 9: [b1d, b1d', b1d''] (3 each).
 """
 
@@ -26,10 +30,13 @@ import numpy as np
 
 __all__ = [
     "COM_REFERENCE_SIZE",
-    "TASK_REFERENCE_SIZE",
     "HEADING_REFERENCE_SIZE",
     "ReferenceSample",
     "TaskReference",
+    "TaskReferenceLayout",
+    "task_reference_size",
+    "task_joint_count",
+    "packed_reference_size",
     "pack_com_reference",
     "pack_task_reference",
     "pack_heading_reference",
@@ -39,38 +46,74 @@ __all__ = [
 ]
 
 COM_REFERENCE_SIZE = 15
-TASK_REFERENCE_SIZE = 27
 HEADING_REFERENCE_SIZE = 9
-_TOTAL_SIZE = COM_REFERENCE_SIZE + TASK_REFERENCE_SIZE + HEADING_REFERENCE_SIZE
+#: Task reference entries that do not depend on the joint components (pose and its rates).
+_POSE_ENTRIES = 24
 
-# Offsets inside the task reference vector (use unpack_task_reference instead of these).
-_TASK_P = slice(0, 3)
-_TASK_R = slice(3, 12)
-_TASK_Q3 = 12
-_TASK_V = slice(13, 16)
-_TASK_W = slice(16, 19)
-_TASK_Q3_DOT = 19
-_TASK_A = slice(20, 23)
-_TASK_DW = slice(23, 26)
-_TASK_Q3_DDOT = 26
 
-# Where each packed vector sits in the concatenation [com, task, heading].
-_COM = slice(0, COM_REFERENCE_SIZE)
-_TASK = slice(COM_REFERENCE_SIZE, COM_REFERENCE_SIZE + TASK_REFERENCE_SIZE)
-_HEADING = slice(COM_REFERENCE_SIZE + TASK_REFERENCE_SIZE, _TOTAL_SIZE)
+def task_reference_size(n_joints: int) -> int:
+    """Size of the task reference vector for a task with ``n_joints`` joint components."""
+    return _POSE_ENTRIES + 3 * int(n_joints)
+
+
+def task_joint_count(size: int) -> int:
+    """The number of joint components of a task reference vector of ``size`` entries."""
+    n_joints, rest = divmod(int(size) - _POSE_ENTRIES, 3)
+    if n_joints < 0 or rest:
+        raise ValueError(f"A task reference vector has 24 + 3 n_j entries (n_j the task's "
+                         f"joint components), got {size}")
+    return n_joints
+
+
+def packed_reference_size(n_joints: int) -> int:
+    """Size of the concatenation [com, task, heading] (the generator's packed vector)."""
+    return COM_REFERENCE_SIZE + task_reference_size(n_joints) + HEADING_REFERENCE_SIZE
+
+
+def packed_slices(n_joints: int) -> tuple[slice, slice, slice]:
+    """Where com, task and heading sit in the packed concatenation [com, task, heading]."""
+    task_end = COM_REFERENCE_SIZE + task_reference_size(n_joints)
+    return (slice(0, COM_REFERENCE_SIZE), slice(COM_REFERENCE_SIZE, task_end),
+            slice(task_end, task_end + HEADING_REFERENCE_SIZE))
+
+
+class TaskReferenceLayout(typing.NamedTuple):
+    """Offsets inside a task reference vector with ``n_joints`` joint components (use
+    :func:`unpack_task_reference` rather than these where you can)."""
+
+    p: slice
+    R: slice
+    q: slice
+    v: slice
+    w: slice
+    q_dot: slice
+    a: slice
+    dw: slice
+    q_ddot: slice
+    #: y_d_dot and y_d_ddot of the full task, [v_ed; w_ed; q_jd_dot] and [a_ed; dw_ed; ...].
+    full_dot: slice
+    full_ddot: slice
+
+    @classmethod
+    def of(cls, n_joints: int) -> "TaskReferenceLayout":
+        j = int(n_joints)
+        return cls(p=slice(0, 3), R=slice(3, 12), q=slice(12, 12 + j),
+                   v=slice(12 + j, 15 + j), w=slice(15 + j, 18 + j),
+                   q_dot=slice(18 + j, 18 + 2 * j), a=slice(18 + 2 * j, 21 + 2 * j),
+                   dw=slice(21 + 2 * j, 24 + 2 * j), q_ddot=slice(24 + 2 * j, 24 + 3 * j),
+                   full_dot=slice(12 + j, 18 + 2 * j), full_ddot=slice(18 + 2 * j, 24 + 3 * j))
 
 
 @dataclasses.dataclass(frozen=True)
 class ReferenceSample:
     """The reference at one time t (all in World).
 
-    From :func:`sample_reference` every field gets an extra leading axis over time (the
-    scalar fields become arrays of shape (N,)).
+    From :func:`sample_reference` every field gets an extra leading axis over time.
     """
 
     # x_d and its 1st..4th time derivatives, row k = k-th derivative (5, 3) (m, m/s, ...).
     com: np.ndarray
-    # End-effector position, velocity, acceleration x_ed, x_ed', x_ed'' (3) (m, m/s, m/s^2).
+    # End-effector position, velocity, acceleration (3) (m, m/s, m/s^2).
     p_ed: np.ndarray
     v_ed: np.ndarray
     a_ed: np.ndarray
@@ -79,10 +122,11 @@ class ReferenceSample:
     # Angular velocity and acceleration of R_ed (3) (rad/s, rad/s^2).
     w_ed: np.ndarray
     dw_ed: np.ndarray
-    # Desired third joint angle and its derivatives (rad, rad/s, rad/s^2).
-    q3d: typing.Union[float, np.ndarray]
-    q3d_dot: typing.Union[float, np.ndarray]
-    q3d_ddot: typing.Union[float, np.ndarray]
+    # Desired angles of the task's joint components and their derivatives (n_j) (rad,
+    # rad/s, rad/s^2): [q3d] for the paper, empty for a pose-only task.
+    q_jd: np.ndarray
+    q_jd_dot: np.ndarray
+    q_jd_ddot: np.ndarray
     # Heading direction b1d and its 1st and 2nd derivatives, rows (3, 3).
     b1d: np.ndarray
 
@@ -104,9 +148,9 @@ class ReferenceSample:
             R_ed=t.R_ed,
             w_ed=t.w_ed,
             dw_ed=t.dw_ed,
-            q3d=t.q3d,
-            q3d_dot=t.q3d_dot,
-            q3d_ddot=t.q3d_ddot,
+            q_jd=t.q_jd,
+            q_jd_dot=t.q_jd_dot,
+            q_jd_ddot=t.q_jd_ddot,
             b1d=unpack_heading_reference(heading),
         )
 
@@ -116,35 +160,41 @@ class TaskReference(typing.NamedTuple):
 
     p_ed: np.ndarray
     R_ed: np.ndarray
-    q3d: typing.Union[float, np.ndarray]
+    q_jd: np.ndarray
     v_ed: np.ndarray
     w_ed: np.ndarray
-    q3d_dot: typing.Union[float, np.ndarray]
+    q_jd_dot: np.ndarray
     a_ed: np.ndarray
     dw_ed: np.ndarray
-    q3d_ddot: typing.Union[float, np.ndarray]
+    q_jd_ddot: np.ndarray
+    #: y_d_dot = [v_ed; w_ed; q_jd_dot] and y_d_ddot = [a_ed; dw_ed; q_jd_ddot], full task.
+    full_dot: np.ndarray
+    full_ddot: np.ndarray
 
 
 def pack_com_reference(sample: ReferenceSample) -> np.ndarray:
-    """[x_d, x_d', x_d'', x_d''', x_d''''] (15,), or (N, 15) for a time-sampled sample."""
+    """[x_d and its 1st..4th derivatives] (15,), or (N, 15) for a time-sampled sample."""
     com = np.asarray(sample.com)
     return com.reshape(com.shape[:-2] + (COM_REFERENCE_SIZE,)).copy()
 
 
 def pack_task_reference(sample: ReferenceSample) -> np.ndarray:
-    """[p_ed, R_ed (row-major), q3d, v_ed, w_ed, q3d_dot, a_ed, dw_ed, q3d_ddot] (27,)."""
+    """[p_ed, R_ed (row-major), q_jd, v_ed, w_ed, q_jd_dot, a_ed, dw_ed, q_jd_ddot]."""
     p_ed = np.asarray(sample.p_ed)
     lead = p_ed.shape[:-1]
-    out = np.empty(lead + (TASK_REFERENCE_SIZE,))
-    out[..., _TASK_P] = p_ed
-    out[..., _TASK_R] = np.asarray(sample.R_ed).reshape(lead + (9,))
-    out[..., _TASK_Q3] = sample.q3d
-    out[..., _TASK_V] = sample.v_ed
-    out[..., _TASK_W] = sample.w_ed
-    out[..., _TASK_Q3_DOT] = sample.q3d_dot
-    out[..., _TASK_A] = sample.a_ed
-    out[..., _TASK_DW] = sample.dw_ed
-    out[..., _TASK_Q3_DDOT] = sample.q3d_ddot
+    q_jd = np.asarray(sample.q_jd, dtype=float)
+    n_joints = q_jd.shape[-1] if q_jd.ndim > len(lead) else 0
+    at = TaskReferenceLayout.of(n_joints)
+    out = np.empty(lead + (task_reference_size(n_joints),))
+    out[..., at.p] = p_ed
+    out[..., at.R] = np.asarray(sample.R_ed).reshape(lead + (9,))
+    out[..., at.q] = q_jd.reshape(lead + (n_joints,))
+    out[..., at.v] = sample.v_ed
+    out[..., at.w] = sample.w_ed
+    out[..., at.q_dot] = np.asarray(sample.q_jd_dot, float).reshape(lead + (n_joints,))
+    out[..., at.a] = sample.a_ed
+    out[..., at.dw] = sample.dw_ed
+    out[..., at.q_ddot] = np.asarray(sample.q_jd_ddot, float).reshape(lead + (n_joints,))
     return out
 
 
@@ -162,20 +212,25 @@ def unpack_com_reference(vector: np.ndarray) -> np.ndarray:
 
 
 def unpack_task_reference(vector: np.ndarray) -> TaskReference:
-    """The task reference vector's pieces (views into it; scalars as floats for a 1-D vector)."""
+    """The task reference vector's pieces (views into it); the number of joint components
+    follows from its size (:func:`task_joint_count`)."""
     vector = np.asarray(vector)
-    _check_size(vector, TASK_REFERENCE_SIZE, "task reference")
-    scalar = float if vector.ndim == 1 else (lambda x: x)
+    if vector.ndim == 0:
+        raise ValueError(f"A task reference vector has 24 + 3 n_j entries (last axis), got "
+                         f"shape {vector.shape}")
+    at = TaskReferenceLayout.of(task_joint_count(vector.shape[-1]))
     return TaskReference(
-        p_ed=vector[..., _TASK_P],
-        R_ed=vector[..., _TASK_R].reshape(vector.shape[:-1] + (3, 3)),
-        q3d=scalar(vector[..., _TASK_Q3]),
-        v_ed=vector[..., _TASK_V],
-        w_ed=vector[..., _TASK_W],
-        q3d_dot=scalar(vector[..., _TASK_Q3_DOT]),
-        a_ed=vector[..., _TASK_A],
-        dw_ed=vector[..., _TASK_DW],
-        q3d_ddot=scalar(vector[..., _TASK_Q3_DDOT]),
+        p_ed=vector[..., at.p],
+        R_ed=vector[..., at.R].reshape(vector.shape[:-1] + (3, 3)),
+        q_jd=vector[..., at.q],
+        v_ed=vector[..., at.v],
+        w_ed=vector[..., at.w],
+        q_jd_dot=vector[..., at.q_dot],
+        a_ed=vector[..., at.a],
+        dw_ed=vector[..., at.dw],
+        q_jd_ddot=vector[..., at.q_ddot],
+        full_dot=vector[..., at.full_dot],
+        full_ddot=vector[..., at.full_ddot],
     )
 
 
@@ -191,4 +246,3 @@ def _check_size(vector: np.ndarray, size: int, what: str) -> None:
         raise ValueError(
             f"A {what} vector has {size} entries (last axis), got shape {vector.shape}"
         )
-

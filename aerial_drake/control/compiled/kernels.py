@@ -455,7 +455,8 @@ def _rotation_angle(R):
 
 
 #: The law's parameters (after the tree in the packed arrays, see CompiledLaw).
-_LawParams = namedtuple("_LawParams", "nq ee_body q3_q q3_v R_BE p_BE gains limits")
+_LawParams = namedtuple("_LawParams",
+                        "nq ee_body nj rows joint_q joint_v R_BE p_BE gains limits")
 
 
 @_jit
@@ -467,19 +468,24 @@ def _unpack_law(model, index):
     p_BE, at = _vec(model, at, 3)
     gains, at = _vec(model, at, 17 + 2 * n)
     limits, at = _vec(model, at, 2)
-    if at != model.shape[0] or k + 4 != index.shape[0]:
+    nj = index[k + 2]
+    if at != model.shape[0] or k + 3 + n + 2 * nj != index.shape[0]:
         raise ValueError("the packed arrays do not match the tree")
-    return tree, _LawParams(index[k], index[k + 1], index[k + 2], index[k + 3], R_BE, p_BE, gains,
-                            limits)
+    rows = index[k + 3:k + 3 + n]
+    joint_q = index[k + 3 + n:k + 3 + n + nj]
+    joint_v = index[k + 3 + n + nj:k + 3 + n + 2 * nj]
+    return tree, _LawParams(index[k], index[k + 1], nj, rows, joint_q, joint_v, R_BE, p_BE,
+                            gains, limits)
 
 
 #: The law's buffers (see :func:`_law_buffers`). Stacks of a quantity and its derivatives:
 #: ``Re3``, ``x_t`` (x_t, x_t_dot, x_t_dd), ``f_d``, ``R_d``, ``Omega_d``, ``w_d``, ``top``,
-#: ``J_y`` and ``y_t``; ``z_d`` is z_d, z_d_dot; the other stacks are scratch.
+#: ``J_y``, ``J6`` (the whole pose's Jacobian), ``y_d`` and ``y_t``; ``z_d`` is z_d, z_d_dot;
+#: the other stacks are scratch.
 _LawBuffers = namedtuple(
     "_LawBuffers", "xi Re3 x_t f_d xg_dd e3 R_d S3 Omega_d RtRd RdtR w_d e_R w_t w_b_dot u2_rho "
-                   "v3 w_i Pp top hat Rw J_y R_WE p_WE Jt J3 JtJ J3_inv R_err y_t z z_d z_t a12 "
-                   "u vn vnv u_prime F force_b")
+                   "v3 w_i Pp top hat Rw J_y J6 y6 y_d R_WE p_WE Jt J3 JtJ J3_inv R_err y_t z z_d "
+                   "z_t a12 u vn vnv u_prime F force_b")
 
 
 @_forceinline
@@ -510,6 +516,9 @@ def _law_buffers(work, nb, nv):
     hat, at = _mat(work, at, 3, 3)
     Rw, at = _mat(work, at, 3, 3)
     J_y, at = _mats(work, at, 2, n, nv)
+    J6, at = _mats(work, at, 2, 6, nv)
+    y6, at = _vec(work, at, 6)
+    y_d, at = _mat(work, at, 2, n)
     R_WE, at = _mat(work, at, 3, 3)
     p_WE, at = _vec(work, at, 3)
     Jt, at = _mat(work, at, n, nv)
@@ -529,7 +538,8 @@ def _law_buffers(work, nb, nv):
     F, at = _vec(work, at, nv)
     force_b, at = _vec(work, at, 3)
     return s, _LawBuffers(xi, Re3, x_t, f_d, xg_dd, e3, R_d, S3, Omega_d, RtRd, RdtR, w_d, e_R,
-                          w_t, w_b_dot, u2_rho, v3, w_i, Pp, top, hat, Rw, J_y, R_WE, p_WE, Jt,
+                          w_t, w_b_dot, u2_rho, v3, w_i, Pp, top, hat, Rw, J_y, J6, y6, y_d,
+                          R_WE, p_WE, Jt,
                           J3, JtJ, J3_inv, R_err, y_t, z, z_d, z_t, a12, u, vn, vnv, u_prime,
                           F, force_b), at
 
@@ -544,7 +554,7 @@ def _workspace_size(nb, nv, law):
 @_jit
 def _law(x, com, task, heading, command, diagnostics, model, index, work):
     """The law (10)-(22) at state ``x``, as control.compute_control; writes ``command``
-    ``[f, mu, tau]`` and ``diagnostics`` (control.DIAGNOSTICS_LAYOUT). Returns
+    ``[f, mu, tau]`` and ``diagnostics`` (control.law.diagnostics_layout(n)). Returns
     ``(status, f_d_norm, sigma_min)``; on a status other than OK the outputs are incomplete.
     ``model``, ``index``: packed by CompiledLaw; ``work``: sized by :func:`_law_buffers`."""
     for i in range(x.shape[0]):
@@ -627,7 +637,7 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
     _mv_into(T_dot, u_b, T_dot_u)
     _lambda_gamma_times(M, C, T_inv, w_b_dot, 3, u_b, T_dot_u, w.u2_rho, 3, w.vnv)
 
-    # Task kinematics: the end-effector frame E on body ee_body, and q3.
+    # Task kinematics: the end-effector frame E on body ee_body, and the task's joints.
     Ri, pi = s.R_all[p.ee_body], s.p_all[p.ee_body]
     Ji, Ji_dot = s.J[p.ee_body], s.J_dot[p.ee_body]
     w_i = w.w_i
@@ -645,18 +655,26 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
     Rw = w.Rw
     _hat_into(w_i, w.hat)
     _mm_into(Ri, w.hat, Rw)
-    J_y, J_y_dot = w.J_y[0], w.J_y[1]
-    _mm_into(Ri, top, J_y[0:3])
-    _mm_into(Ri, Ji[:3], J_y[3:6])
-    for j in range(nv):
-        J_y[6, j], J_y_dot[6, j] = 0.0, 0.0
-    J_y[6, p.q3_v] = 1.0
+    J6, J6_dot = w.J6[0], w.J6[1]  # [v_E; w_E] of the whole pose
+    _mm_into(Ri, top, J6[0:3])
+    _mm_into(Ri, Ji[:3], J6[3:6])
     for (k, A, A_dot) in ((0, top, top_dot), (3, Ji[:3], Ji_dot[:3])):
-        _mm_into(Rw, A, J_y_dot[k:k + 3])
+        _mm_into(Rw, A, J6_dot[k:k + 3])
         _mm_into(Ri, A_dot, tmp)
         for i in range(3):
             for j in range(nv):
-                J_y_dot[k + i, j] += tmp[i, j]
+                J6_dot[k + i, j] += tmp[i, j]
+    # The task's rows of [J6; joint rows] (robots.task: row r < 6 a pose row, else a joint).
+    J_y, J_y_dot = w.J_y[0], w.J_y[1]
+    for i in range(n):
+        r = p.rows[i]
+        for j in range(nv):
+            if r < 6:
+                J_y[i, j], J_y_dot[i, j] = J6[r, j], J6_dot[r, j]
+            else:
+                J_y[i, j], J_y_dot[i, j] = 0.0, 0.0
+        if r >= 6:
+            J_y[i, p.joint_v[r - 6]] = 1.0
     R_WE, p_WE = w.R_WE, w.p_WE
     _mm_into(Ri, p.R_BE, R_WE)
     _mv_into(Ri, p.p_BE, p_WE)
@@ -673,12 +691,21 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
         return ASSUMPTION_1, f_d_norm, sigma_min
     R_err = w.R_err
     _mm_into(R_WE, task[3:12].reshape((3, 3)).T, R_err)
-    y_t, y_t_dot = w.y_t[0], w.y_t[1]
+    y_t, y_t_dot, y6 = w.y_t[0], w.y_t[1], w.y6
     for i in range(3):
-        y_t[i] = p_WE[i] - task[i]
-    _vee_into(R_err, y_t[3:6])
-    y_t[6] = x[p.q3_q] - task[12]
-    y_d_dot, y_d_ddot = task[13:20], task[20:27]
+        y6[i] = p_WE[i] - task[i]
+    _vee_into(R_err, y6[3:6])
+    # The task reference's full y_d_dot, y_d_ddot blocks (reference.TaskReferenceLayout).
+    nj = p.nj
+    full_dot, full_ddot = task[12 + nj:18 + 2 * nj], task[18 + 2 * nj:24 + 3 * nj]
+    y_d_dot, y_d_ddot = w.y_d[0], w.y_d[1]
+    for i in range(n):
+        r = p.rows[i]
+        if r < 6:
+            y_t[i] = y6[r]
+        else:
+            y_t[i] = x[p.joint_q[r - 6]] - task[12 + r - 6]
+        y_d_dot[i], y_d_ddot[i] = full_dot[r], full_ddot[r]
     _mv_into(Jt, xi, y_t_dot)
     for i in range(n):
         y_t_dot[i] -= y_d_dot[i]  # (17)
@@ -740,7 +767,7 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
     for i in range(n):
         command[4 + i] = F[6 + i]
 
-    # Diagnostics (24)-(25), in DIAGNOSTICS_LAYOUT order.
+    # Diagnostics (24)-(25), in diagnostics_layout(n) order.
     s_t, Lz, Lambda_z_zt = w.vn[10], w.vn[11], w.vn[12]
     _mv_into(J3_inv, z_t, s_t)
     u_t, Mu = w.u[0], w.vnv[0]  # Lambda [0; 0; s_t] = T^-T (M (T^-1 [0; 0; s_t])) (5)
@@ -762,7 +789,7 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
             diagnostics[k] = block[i]
             k += 1
     scalars = (sigma_min, f_d_norm, V1, V_task, V1 + V_task, _norm(x_t),
-               _rotation_angle(RdtR), _norm(y_t[:3]), _rotation_angle(R_err),
+               _rotation_angle(RdtR), _norm(y6[:3]), _rotation_angle(R_err),
                force_b[0], force_b[1])
     for value in scalars:
         diagnostics[k] = value

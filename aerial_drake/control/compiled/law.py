@@ -12,12 +12,13 @@ from numba import types
 
 from aerial_drake.control.compiled.kernels import _decompose, _law, _workspace_size
 from aerial_drake.control.compiled.kinematics import _pack_tree
-from aerial_drake.control.law import DIAGNOSTICS_SIZE
+from aerial_drake.control.law import diagnostics_size
 from aerial_drake.dynamics.kinematic_tree import KinematicTree
+from aerial_drake.robots.task import TaskLayout
 from aerial_drake.trajectories.reference import (
     COM_REFERENCE_SIZE,
     HEADING_REFERENCE_SIZE,
-    TASK_REFERENCE_SIZE,
+    task_reference_size,
     unpack_heading_reference,
     unpack_task_reference,
 )
@@ -91,14 +92,14 @@ class CompiledLaw:
         tree: the controller model's tree (:meth:`KinematicTree.from_plant`).
         num_positions: size of q in the state ``x = [q; v]``.
         end_effector: ``(index of the body in tree, R_BE, p_BE)`` of the task frame E.
-        q3_position_index, q3_velocity_index: the task's joint coordinate q3.
+        task: the task's rows and its joints' indices (:class:`TaskLayout`).
         gains: packed by :func:`pack_gains`.
         sigma_min_J3_limit, f_d_limit: the Assumption 1 and 2 thresholds.
     """
 
     def __init__(self, tree: KinematicTree, num_positions: int,
-                 end_effector: tuple[int, np.ndarray, np.ndarray], q3_position_index: int,
-                 q3_velocity_index: int, gains: np.ndarray, sigma_min_J3_limit: float,
+                 end_effector: tuple[int, np.ndarray, np.ndarray], task: TaskLayout,
+                 gains: np.ndarray, sigma_min_J3_limit: float,
                  f_d_limit: float):
         body, R_BE, p_BE = end_effector
         nb, nv = tree.parent.size, tree.reflected_inertia.size
@@ -109,8 +110,12 @@ class CompiledLaw:
         # The law's parameters after the tree, in the order _unpack_law reads them.
         self._model = np.concatenate([floats, np.ravel(R_BE), np.ravel(p_BE), gains,
                                       [sigma_min_J3_limit, f_d_limit]]).astype(float)
-        self._index = np.concatenate([ints, [num_positions, body, q3_position_index,
-                                             q3_velocity_index]]).astype(np.int64)
+        if task.n != nv - 6:
+            raise ValueError(f"a task of {task.n} rows for {nv - 6} arm velocities")
+        self._index = np.concatenate([ints, [num_positions, body, task.n_joints], task.rows,
+                                      task.joint_positions, task.joint_velocities]
+                                     ).astype(np.int64)
+        self._n_joints = task.n_joints
         self._work = np.zeros(_workspace_size(nb, nv, True))
         self._nq, self._nv = int(num_positions), nv
         self._compile()
@@ -123,11 +128,12 @@ class CompiledLaw:
         _note_if_cold()
         x = np.zeros(self._nq + self._nv)
         x[0] = 1.0  # unit quaternion, all else zero
-        com, task = np.zeros(COM_REFERENCE_SIZE), np.zeros(TASK_REFERENCE_SIZE)
+        com, task = np.zeros(COM_REFERENCE_SIZE), np.zeros(task_reference_size(self._n_joints))
         heading = np.zeros(HEADING_REFERENCE_SIZE)
         unpack_task_reference(task).R_ed[:] = np.eye(3)  # views into the vectors
         unpack_heading_reference(heading)[0, 0] = 1.0  # b1d = e_x
-        self(x, com, task, heading, np.empty(4 + self._nv - 6), np.empty(DIAGNOSTICS_SIZE))
+        self(x, com, task, heading, np.empty(4 + self._nv - 6),
+             np.empty(diagnostics_size(self._nv - 6)))
 
     def __call__(self, x: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
                  command: np.ndarray, diagnostics: np.ndarray) -> tuple[int, float, float]:
