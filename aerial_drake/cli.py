@@ -21,27 +21,35 @@ from aerial_drake.viz.live import WAIT_TIMEOUT_S
 
 
 def _cmd_info(args: argparse.Namespace) -> int:
-    from aerial_drake.robots.models import PLANT_VARIANTS, make_plant
+    from aerial_drake.robots.description import load_robot_description, shipped_robots
+    from aerial_drake.robots.models import make_plant
     from aerial_drake.simulation.scenarios import shipped_scenarios
 
-    for variant in PLANT_VARIANTS:
-        manip = make_plant(variant)
-        plant = manip.plant
-        ctx = plant.CreateDefaultContext()
-        print(f"plant variant '{variant}': {plant.num_bodies() - 1} bodies, "
-              f"{plant.num_positions()} positions, {plant.num_velocities()} velocities, "
-              f"{plant.num_actuators()} actuators, total mass "
-              f"{plant.CalcTotalMass(ctx):.3f} kg")
-        I = manip.base_body.CalcSpatialInertiaInBodyFrame(ctx).CalcRotationalInertia()
-        print(f"  base body '{manip.base_body.name()}': mass "
-              f"{manip.base_body.get_mass(ctx):.3f} kg, inertia diag "
-              f"{np.round(np.diag(I.CopyToFullMatrix3()), 4).tolist()} kg m^2")
-        print(f"  arm joints: {[j.name() for j in manip.arm_joints]}")
-        print(f"  arm effort limits (N m): {manip.arm_effort_limits().tolist()}")
-        if manip.rotor_joints:
-            print(f"  rotor joints: {[j.name() for j in manip.rotor_joints]}")
+    for name in shipped_robots():
+        robot = load_robot_description(name)
+        print(f"robot '{name}': task {list(robot.task)}")
+        for variant in robot.variant_names():
+            _print_variant(make_plant(variant, robot=robot), variant)
     print(f"shipped scenarios: {sorted(shipped_scenarios())}")
     return 0
+
+
+def _print_variant(manip, variant: str) -> None:
+    """One plant variant's sizes, mass and joints (``aerial-drake info``)."""
+    plant = manip.plant
+    ctx = plant.CreateDefaultContext()
+    print(f"  plant variant '{variant}': {plant.num_bodies() - 1} bodies, "
+          f"{plant.num_positions()} positions, {plant.num_velocities()} velocities, "
+          f"{plant.num_actuators()} actuators, total mass "
+          f"{plant.CalcTotalMass(ctx):.3f} kg")
+    I = manip.base_body.CalcSpatialInertiaInBodyFrame(ctx).CalcRotationalInertia()
+    print(f"    vehicle body '{manip.base_body.name()}': mass "
+          f"{manip.base_body.get_mass(ctx):.3f} kg, inertia diag "
+          f"{np.round(np.diag(I.CopyToFullMatrix3()), 4).tolist()} kg m^2")
+    print(f"    arm joints: {[j.name() for j in manip.arm_joints]}")
+    print(f"    arm effort limits (N m): {manip.arm_effort_limits().tolist()}")
+    if manip.rotor_joints:
+        print(f"    rotor joints: {[j.name() for j in manip.rotor_joints]}")
 
 
 def _table(header: list[str], rows: list[list[str]]) -> str:

@@ -19,7 +19,8 @@ from aerial_drake.trajectories.reference import ReferenceSample
 @dataclass(frozen=True)
 class HoverEquilibrium:
     """A hover: the robot at rest with the CoM at ``p_WG``, the base level with heading
-    ``yaw``, the end effector at ``(p_WE, R_WE)`` and joint 3 at ``q3``, and the inputs that
+    ``yaw``, the end effector at ``(p_WE, R_WE)`` and the task's joints at ``q_j``, and the
+    inputs that
     hold it (static balance ``F = g(q)`` through ``[J_b^T Q^T]``)."""
 
     model: AerialManipulator  # the plant ``q`` belongs to (quaternion or rpy base)
@@ -28,7 +29,7 @@ class HoverEquilibrium:
     yaw: float  # rad, heading of the base x axis about World z
     p_WE: np.ndarray  # m, World
     R_WE: np.ndarray
-    q3: float  # rad
+    q_j: np.ndarray  # rad, the task's joint components (task order)
     thrust: float  # f (N), along the base z axis
     body_torques: np.ndarray  # mu (N m), base frame
     joint_torques: np.ndarray  # tau (N m)
@@ -45,25 +46,26 @@ class HoverEquilibrium:
 
     @property
     def inputs(self) -> np.ndarray:
-        """``[f, mu (3), tau (7)]``, the command layout of the controller."""
+        """``[f, mu (3), tau (n)]``, the command layout of the controller."""
         return np.concatenate([[self.thrust], self.body_torques, self.joint_torques])
 
     def reference(self) -> ReferenceSample:
         """The constant reference that has this hover as its equilibrium: ``x_d = p_WG`` with
-        zero derivatives, the task at ``(p_WE, R_WE, q3)`` at rest, ``b1d`` along the heading."""
+        zero derivatives, the task at ``(p_WE, R_WE, q_j)`` at rest, ``b1d`` along the
+        heading."""
         z3 = np.zeros(3)
         b1d = np.zeros((3, 3))
         b1d[0] = [math.cos(self.yaw), math.sin(self.yaw), 0.0]
         return ReferenceSample(
             com=np.vstack([self.p_WG, np.zeros((4, 3))]), p_ed=self.p_WE.copy(), v_ed=z3,
-            a_ed=z3, R_ed=self.R_WE.copy(), w_ed=z3, dw_ed=z3, q3d=float(self.q3),
-            q3d_dot=0.0, q3d_ddot=0.0, b1d=b1d)
+            a_ed=z3, R_ed=self.R_WE.copy(), w_ed=z3, dw_ed=z3, q_jd=self.q_j.copy(),
+            q_jd_dot=np.zeros_like(self.q_j), q_jd_ddot=np.zeros_like(self.q_j), b1d=b1d)
 
     def summary(self) -> dict:
         return {
             "p_WG_m": self.p_WG.tolist(), "yaw_rad": self.yaw, "p_WE_m": self.p_WE.tolist(),
             "rpy_WE_rad": RollPitchYaw(RotationMatrix(self.R_WE)).vector().tolist(),
-            "q3_rad": self.q3, "q": self.q.tolist(),
+            "task_joints_rad": self.q_j.tolist(), "q": self.q.tolist(),
             "base_position_coordinates": self.model.floating_base,
             "thrust_N": self.thrust, "body_torques_Nm": self.body_torques.tolist(),
             "joint_torques_Nm": self.joint_torques.tolist(),
@@ -93,18 +95,20 @@ def hover_inputs(model: AerialManipulator, q: np.ndarray) -> tuple[float, np.nda
 
 
 def hover_equilibrium(p_WG: np.ndarray, p_WE: np.ndarray, R_WE: np.ndarray | None = None, *,
-                      yaw: float = 0.0, q3: float = 0.0,
+                      yaw: float = 0.0, q_j=None,
                       model: AerialManipulator | None = None,
                       q_guess: np.ndarray | None = None) -> HoverEquilibrium:
     """The hover with the CoM at ``p_WG`` (m), the base level with heading ``yaw`` (rad), the
     end effector at ``p_WE`` (m) with orientation ``R_WE`` (default: the heading's yaw) and
-    joint 3 at ``q3`` (rad), on ``model`` (default: the rigid model with an rpy base).
+    the task's joint components at ``q_j`` (rad; default: the nominal posture's), on
+    ``model`` (default: the paper's rigid model with an rpy base).
 
     Raises:
         UnreachablePose: no configuration realises the pose; the message names the failing
-            constraints (CoM, end-effector position or orientation, q3) and what was asked.
+            constraints (CoM, end-effector position or orientation, joints) and what was asked.
     """
     model = model if model is not None else make_plant("rigid", floating_base="rpy")
+    q_j = model.task_joint_nominal() if q_j is None else np.asarray(q_j, dtype=float)
     p_WG = np.asarray(p_WG, dtype=float).copy()
     p_WE = np.asarray(p_WE, dtype=float).copy()
     R_WB = RotationMatrix.MakeZRotation(yaw).matrix()
@@ -112,17 +116,17 @@ def hover_equilibrium(p_WG: np.ndarray, p_WE: np.ndarray, R_WE: np.ndarray | Non
         R_WE = R_WE.matrix()
     R_WE = R_WB if R_WE is None else np.asarray(R_WE, dtype=float)
     try:
-        q = solve_configuration(model, p_WG=p_WG, R_WB=R_WB, p_WE=p_WE, R_WE=R_WE, q3=q3,
+        q = solve_configuration(model, p_WG=p_WG, R_WB=R_WB, p_WE=p_WE, R_WE=R_WE, q_j=q_j,
                                 q_guess=q_guess)
     except UnreachablePose as err:
         raise UnreachablePose(
             f"no hover equilibrium with the CoM at {p_WG.round(4).tolist()} m, heading "
             f"{yaw:g} rad, end effector at {p_WE.round(4).tolist()} m (rpy "
             f"{RollPitchYaw(RotationMatrix(R_WE)).vector().round(4).tolist()} rad), "
-            f"q3 = {q3:g} rad: {err}") from None
+            f"task joints {np.round(q_j, 4).tolist()} rad: {err}") from None
     f, mu, tau, residual = hover_inputs(model, q)
     return HoverEquilibrium(model=model, q=q, p_WG=p_WG, yaw=float(yaw), p_WE=p_WE,
-                            R_WE=np.array(R_WE), q3=float(q3), thrust=f, body_torques=mu,
+                            R_WE=np.array(R_WE), q_j=q_j, thrust=f, body_torques=mu,
                             joint_torques=tau, horizontal_force_residual=residual)
 
 
@@ -130,7 +134,8 @@ def default_equilibria(model: AerialManipulator | None = None) -> dict[str, Hove
     """Two hovers used by the analysis and the tests: ``"nominal"`` (the end effector at the
     model's nominal offset from the CoM, :func:`nominal_end_effector_offset`: 0.3 m ahead
     and 0.6 m below, R_WE = I, the mount's design pose) and ``"turned"``
-    (heading 0.7 rad, the end effector moved and tilted, q3 = 0.2 rad)."""
+    (heading 0.7 rad, the end effector moved and tilted, the task's joints 0.2 rad off
+    nominal)."""
     model = model if model is not None else make_plant("rigid", floating_base="rpy")
     p_WG = np.array([0.0, 0.0, 2.0])
     yaw = 0.7
@@ -140,7 +145,8 @@ def default_equilibria(model: AerialManipulator | None = None) -> dict[str, Hove
         "nominal": hover_equilibrium(p_WG, p_WG + nominal_end_effector_offset(model),
                                      np.eye(3), model=model),
         "turned": hover_equilibrium(p_WG, p_WG + R_yaw.matrix() @ [0.35, 0.1, -0.55],
-                                    turned_R_WE, yaw=yaw, q3=0.2, model=model),
+                                    turned_R_WE, yaw=yaw,
+                                    q_j=model.task_joint_nominal() + 0.2, model=model),
     }
 
 

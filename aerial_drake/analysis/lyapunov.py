@@ -14,7 +14,7 @@ import numpy as np
 from pydrake.systems.analysis import SimulatorConfig
 
 from aerial_drake.analysis.settings import FULL_SETTINGS
-from aerial_drake.control.law import Gains, diagnostics_slices
+from aerial_drake.control.law import Gains, diagnostics_slices, task_size_of_diagnostics
 from aerial_drake.robots.models import make_plant
 from aerial_drake.simulation.scenarios import Scenario, load_scenario
 
@@ -149,7 +149,8 @@ def lyapunov_study(base: Scenario | str = "nominal", *,
     start = time.perf_counter()
     result = run_scenario(scenario, progress=False)
     wall = time.perf_counter() - start
-    d, s = result.log["diagnostics"], diagnostics_slices()
+    d = result.log["diagnostics"]
+    s = diagnostics_slices(task_size_of_diagnostics(d.shape[1]))
     return LyapunovResult(scenario=scenario, t=result.log["t"], V=d[:, s["V"]].ravel(),
                           V1=d[:, s["V1"]].ravel(), V_task=d[:, s["V_task"]].ravel(),
                           wall_time_s=wall)

@@ -68,14 +68,15 @@ def region_of_attraction(base: Scenario | str = "nominal", *,
     scenario = load_scenario(base) if isinstance(base, str) else base
     scenario = dataclasses.replace(scenario, duration=duration, disturbances=[])
     rng = np.random.default_rng(seed)
-    V = diagnostics_slices()["V"]
+    n = scenario.controller_model().n
+    V = diagnostics_slices(n)["V"]
     runs, start = [], time.perf_counter()
     for s in scales:
         for _ in range(samples):
             offsets = {
                 "base_position_offset": s * ROA_UNIT["base_position_offset"] * _unit_vector(rng, 3),
                 "base_rpy_offset": s * ROA_UNIT["base_rpy_offset"] * _unit_vector(rng, 3),
-                "arm_offset": s * ROA_UNIT["arm_offset"] * _unit_vector(rng, 7),
+                "arm_offset": s * ROA_UNIT["arm_offset"] * _unit_vector(rng, n),
             }
             initial = dataclasses.replace(scenario.initial,
                                           **{k: v.tolist() for k, v in offsets.items()})

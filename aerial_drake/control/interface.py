@@ -5,18 +5,19 @@ The closed loop (:mod:`aerial_drake.simulation.diagram`) takes any Drake ``LeafS
 
 Input ports (vector, sizes for the controller's model plant with ``n`` arm joints):
     - ``state``: ``[q; v]`` of the rigid model (``nq + nv``: quaternion base, then the arm).
-    - ``com_reference`` (15), ``task_reference`` (27), ``heading_reference`` (9): as
+    - ``com_reference`` (15), ``task_reference`` (24 + 3 n_j, n_j the task's joint
+      components: 27 for the paper's task), ``heading_reference`` (9): as
       :class:`aerial_drake.trajectories.generator.ReferenceGenerator` produces them (layouts in
       :mod:`aerial_drake.trajectories.reference`).
 
 Output ports:
     - ``command``: ``[f, mu (3), tau (n)]``, thrust along body z (N), body torques (N m, base
       frame), joint torques (N m): the inputs of (1).
-    - ``diagnostics``: :data:`aerial_drake.control.law.DIAGNOSTICS_LAYOUT`. The metrics read
+    - ``diagnostics``: :func:`aerial_drake.control.law.diagnostics_layout`. The metrics read
       the error entries, so every controller fills them with the same definitions
       (:func:`error_diagnostics`): ``x_tilde = x_g - x_d`` (system CoM), ``y_tilde`` of
       :func:`aerial_drake.control.law.task_error`, ``com_error = |x_tilde|``,
-      ``ee_position_error = |y_tilde[:3]|``, ``ee_orientation_error`` = angle of
+      ``ee_position_error = |p_E - p_ed|``, ``ee_orientation_error`` = angle of
       ``R_E R_ed^T``, ``base_attitude_error`` = angle of ``R_d^T R_b`` with ``R_d`` the attitude
       the controller itself commands. Entries a controller does not define are NaN.
 
@@ -32,16 +33,17 @@ from __future__ import annotations
 import numpy as np
 
 from aerial_drake.control.law import (
-    DIAGNOSTICS_LAYOUT,
-    DIAGNOSTICS_SIZE,
+    diagnostics_layout,
+    diagnostics_size,
     diagnostics_slices,
     rotation_angle,
     task_error,
 )
+from aerial_drake.robots.task import TaskLayout
 from aerial_drake.trajectories.reference import (
     COM_REFERENCE_SIZE,
     HEADING_REFERENCE_SIZE,
-    TASK_REFERENCE_SIZE,
+    task_reference_size,
 )
 
 INPUT_PORTS = ("state", "com_reference", "task_reference", "heading_reference")
@@ -52,24 +54,27 @@ REQUIRED_DIAGNOSTICS = ("x_tilde", "x_tilde_dot", "y_tilde", "com_error",
                         "base_attitude_error", "ee_position_error", "ee_orientation_error")
 
 
-def required_diagnostics_columns() -> np.ndarray:
-    """Column indices of :data:`REQUIRED_DIAGNOSTICS` in the diagnostics vector."""
-    sl = diagnostics_slices()
-    return np.concatenate([np.arange(DIAGNOSTICS_SIZE)[sl[name]]
+def required_diagnostics_columns(n: int) -> np.ndarray:
+    """Column indices of :data:`REQUIRED_DIAGNOSTICS` in the diagnostics vector of a task of
+    ``n`` rows."""
+    sl = diagnostics_slices(n)
+    return np.concatenate([np.arange(diagnostics_size(n))[sl[name]]
                            for name in REQUIRED_DIAGNOSTICS])
 
 
-def port_sizes(num_states: int, n_arm: int) -> dict[str, int]:
-    """Each port's size for a model with ``num_states`` (nq + nv) and ``n_arm`` joints."""
+def port_sizes(num_states: int, n_arm: int, n_task_joints: int) -> dict[str, int]:
+    """Each port's size for a model with ``num_states`` (nq + nv), ``n_arm`` joints and a task
+    with ``n_task_joints`` joint components."""
     return {"state": num_states, "com_reference": COM_REFERENCE_SIZE,
-            "task_reference": TASK_REFERENCE_SIZE, "heading_reference": HEADING_REFERENCE_SIZE,
-            "command": 4 + n_arm, "diagnostics": DIAGNOSTICS_SIZE}
+            "task_reference": task_reference_size(n_task_joints),
+            "heading_reference": HEADING_REFERENCE_SIZE,
+            "command": 4 + n_arm, "diagnostics": diagnostics_size(n_arm)}
 
 
-def check_controller_ports(system, num_states: int, n_arm: int) -> None:
+def check_controller_ports(system, num_states: int, n_arm: int, n_task_joints: int) -> None:
     """Raise ValueError naming the port if ``system`` lacks a port of the interface or has it
     with the wrong size."""
-    sizes = port_sizes(num_states, n_arm)
+    sizes = port_sizes(num_states, n_arm, n_task_joints)
     name = system.get_name() or type(system).__name__
     for kind, names, has, get in (
             ("input", INPUT_PORTS, system.HasInputPort, system.GetInputPort),
@@ -85,11 +90,11 @@ def check_controller_ports(system, num_states: int, n_arm: int) -> None:
                                  f"{get(port).size()}, the interface needs {sizes[port]}")
 
 
-def error_diagnostics(*, x_g: np.ndarray, x_g_dot: np.ndarray, com_reference: np.ndarray,
-                      p_WE: np.ndarray, R_WE: np.ndarray, q3: float, p_ed: np.ndarray,
-                      R_ed: np.ndarray, q3d: float, R_b: np.ndarray, R_d: np.ndarray,
-                      **other) -> np.ndarray:
-    """A diagnostics vector (:data:`DIAGNOSTICS_LAYOUT`) with the errors the metrics read,
+def error_diagnostics(*, task: TaskLayout, x_g: np.ndarray, x_g_dot: np.ndarray,
+                      com_reference: np.ndarray, p_WE: np.ndarray, R_WE: np.ndarray,
+                      q_j: np.ndarray, p_ed: np.ndarray, R_ed: np.ndarray, q_jd: np.ndarray,
+                      R_b: np.ndarray, R_d: np.ndarray, **other) -> np.ndarray:
+    """A diagnostics vector (:func:`diagnostics_layout`) with the errors the metrics read,
     by the paper controller's definitions, and ``other`` entries by name (``e_R=...``,
     ``sigma_min_J3=...``); the rest NaN.
 
@@ -97,19 +102,20 @@ def error_diagnostics(*, x_g: np.ndarray, x_g_dot: np.ndarray, com_reference: np
     attitude, ``R_d`` the attitude the controller commands.
     """
     x_t = x_g - com_reference[0]
-    y_t, R_err = task_error(p_WE, R_WE, q3, p_ed, R_ed, q3d)
+    y_t, R_err = task_error(p_WE, R_WE, q_j, p_ed, R_ed, q_jd, task.rows)
     entries = {"x_tilde": x_t, "x_tilde_dot": x_g_dot - com_reference[1], "y_tilde": y_t,
                "com_error": np.linalg.norm(x_t),
                "base_attitude_error": rotation_angle(R_d.T @ R_b),
-               "ee_position_error": np.linalg.norm(y_t[:3]),
+               "ee_position_error": np.linalg.norm(p_WE - p_ed),
                "ee_orientation_error": rotation_angle(R_err)}
-    unknown = set(other) - {n for n, _ in DIAGNOSTICS_LAYOUT}
+    layout = diagnostics_layout(task.n)
+    unknown = set(other) - {n for n, _ in layout}
     if unknown:
         raise KeyError(f"no diagnostics entries {sorted(unknown)}; the layout has "
-                       f"{[n for n, _ in DIAGNOSTICS_LAYOUT]}")
+                       f"{[n for n, _ in layout]}")
     entries.update(other)
-    out = np.full(DIAGNOSTICS_SIZE, np.nan)
-    for key, sl in diagnostics_slices().items():
+    out = np.full(diagnostics_size(task.n), np.nan)
+    for key, sl in diagnostics_slices(task.n).items():
         if key in entries:
             out[sl] = entries[key]
     return out

@@ -153,6 +153,14 @@ def diagnostics_slices(layout: "int | tuple[tuple[str, int], ...] | list"
     return out
 
 
+def task_size_of_diagnostics(width: int) -> int:
+    """The task's size n of a diagnostics vector (or log) of ``width`` entries."""
+    n, rest = divmod(int(width) - diagnostics_size(0), 2)
+    if n < 0 or rest:
+        raise ValueError(f"{width} entries is not a diagnostics vector's size (23 + 2 n)")
+    return n
+
+
 def diagnostics_size(n: int) -> int:
     """Length of the diagnostics vector for a task of ``n`` rows."""
     return sum(size for _, size in diagnostics_layout(n))

@@ -1,5 +1,6 @@
-"""Configurations that realise a task: Drake's InverseKinematics on the CoM, base attitude,
-end-effector pose and q3, and the hover inputs that hold such a configuration."""
+"""Configurations that realise a task: Drake's InverseKinematics on the CoM, base attitude and
+the task (the rows of end-effector pose and joint angles the robot's task tracks), polished by
+Newton steps, and the hover inputs that hold such a configuration."""
 
 from __future__ import annotations
 
@@ -13,19 +14,20 @@ from pydrake.solvers import Solve
 
 from aerial_drake.dynamics.decoupling import vee
 from aerial_drake.robots.models import AerialManipulator
+from aerial_drake.robots.task import POSE_ROWS, TaskLayout
 
 
 class UnreachablePose(ValueError):
-    """The requested CoM / end-effector pose / q3 cannot be realised by the model."""
+    """The requested CoM / base attitude / task cannot be realised by the model."""
 
 
 @dataclass(frozen=True)
 class ConfigurationResidual:
     com: float  # m
-    ee_position: float  # m
-    ee_orientation: float  # rad
+    ee_position: float  # m, over the task's position rows
+    ee_orientation: float  # rad, over the task's orientation rows
     base_orientation: float  # rad
-    q3: float  # rad
+    joints: float  # rad, largest error of the task's joint components
     joint_limits: float  # rad beyond the arm's position limits (0 inside)
 
     def violations(self, tol_m: float, tol_rad: float, joint_limits: bool = True) -> list[str]:
@@ -34,7 +36,8 @@ class ConfigurationResidual:
         checks = [("CoM position", self.com, tol_m),
                   ("end-effector position", self.ee_position, tol_m),
                   ("end-effector orientation", self.ee_orientation, tol_rad),
-                  ("base orientation", self.base_orientation, tol_rad), ("q3", self.q3, tol_rad)]
+                  ("base orientation", self.base_orientation, tol_rad),
+                  ("task joint angles", self.joints, tol_rad)]
         if joint_limits:
             checks.append(("arm joint limits", self.joint_limits, tol_rad))
         for name, value, tol in checks:
@@ -43,35 +46,62 @@ class ConfigurationResidual:
         return failed
 
 
+def _task(manip: AerialManipulator) -> TaskLayout:
+    if manip.task is None:
+        raise ValueError("the model's plant is not finalized: it has no task yet")
+    return manip.task
+
+
+def task_residual(manip: AerialManipulator, ctx, q: np.ndarray, p_WE, R_WE, q_j) -> np.ndarray:
+    """The task's rows of ``[p_E - p_WE; vee(R_E R_WE^T); q_j(q) - q_j]`` at ``q``."""
+    X_WE = manip.end_effector_frame.CalcPoseInWorld(ctx)
+    task = _task(manip)
+    full = np.concatenate([X_WE.translation() - p_WE,
+                           vee(X_WE.rotation().matrix() @ np.asarray(R_WE).T),
+                           q[list(task.joint_positions)] - np.asarray(q_j, dtype=float)])
+    return full[list(task.rows)]
+
+
 def solve_configuration(manip: AerialManipulator, *, p_WG: np.ndarray, R_WB: np.ndarray,
-                        p_WE: np.ndarray, R_WE: np.ndarray, q3: float,
+                        p_WE: np.ndarray, R_WE: np.ndarray, q_j=(),
                         q_guess: np.ndarray | None = None, tolerance: float = 1e-6,
                         respect_joint_limits: bool = True) -> np.ndarray:
-    """Generalized positions with the system CoM at ``p_WG``, the base at orientation ``R_WB``,
-    the end-effector frame at ``(p_WE, R_WE)`` and joint 3 at ``q3``.
+    """Generalized positions with the system CoM at ``p_WG``, the base at orientation ``R_WB``
+    and the task at ``(p_WE, R_WE, q_j)``: the rows of the end-effector pose and the joint
+    angles ``q_j`` (task order) the robot's task holds.
 
-    Ten equations in ten unknowns (base position, seven joints): the solution is locally
+    3 + n equations in 3 + n unknowns (base position, n joints): the solution is locally
     unique. Raises :class:`UnreachablePose` naming the constraints that the solution misses by
     more than ``tolerance`` (m or rad): the arm's joint limits among them unless
     ``respect_joint_limits`` is False (the continuous simulation does not enforce them, and
     the paper's task leaves them; docs/models.md).
     """
     plant = manip.plant
+    task = _task(manip)
+    q_j = np.asarray(q_j, dtype=float)
+    if q_j.size != task.n_joints:
+        raise ValueError(f"q_j has {q_j.size} angles for the task's {task.n_joints} joints "
+                         f"({', '.join(task.joint_names) or 'none'})")
     ik = InverseKinematics(plant, with_joint_limits=respect_joint_limits)
     q = ik.q()
     prog = ik.get_mutable_prog()
     world = plant.world_frame()
     ik.AddOrientationConstraint(world, RotationMatrix(R_WB), manip.base_body.body_frame(),
                                 RotationMatrix(), 0.0)
-    ik.AddPositionConstraint(manip.end_effector_frame, np.zeros(3), world, p_WE, p_WE)
-    ik.AddOrientationConstraint(world, RotationMatrix(R_WE), manip.end_effector_frame,
-                                RotationMatrix(), 0.0)
+    free = np.full(3, np.inf)
+    held = np.array([r in task.rows for r in range(3)])
+    if held.any():
+        ik.AddPositionConstraint(manip.end_effector_frame, np.zeros(3), world,
+                                 np.where(held, p_WE, -free), np.where(held, p_WE, free))
+    if task.has_full_orientation:
+        ik.AddOrientationConstraint(world, RotationMatrix(R_WE), manip.end_effector_frame,
+                                    RotationMatrix(), 0.0)
     r = prog.NewContinuousVariables(3, "p_WG")
     prog.AddConstraint(ComPositionConstraint(plant, None, world, ik.context()),
                        np.concatenate([q, r]))
     prog.AddBoundingBoxConstraint(p_WG, p_WG, r)
-    i3 = manip.arm_joints[2].position_start()
-    prog.AddBoundingBoxConstraint(q3, q3, q[i3])
+    for index, angle in zip(task.joint_positions, q_j):
+        prog.AddBoundingBoxConstraint(angle, angle, q[index])
     if q_guess is None:
         # The nominal posture, with the base placed so that its CoM lands on p_WG.
         q_guess = nominal_positions(manip, p_WB=np.zeros(3), R_WB=R_WB)
@@ -84,9 +114,9 @@ def solve_configuration(manip: AerialManipulator, *, p_WG: np.ndarray, R_WB: np.
     prog.SetInitialGuess(r, p_WG)
     result = Solve(prog)
     q_sol = _newton_polish(manip, result.GetSolution(q), p_WG=p_WG, R_WB=R_WB, p_WE=p_WE,
-                           R_WE=R_WE, q3=q3)
+                           R_WE=R_WE, q_j=q_j)
     residual = configuration_residual(manip, q_sol, p_WG=p_WG, R_WB=R_WB, p_WE=p_WE,
-                                      R_WE=R_WE, q3=q3)
+                                      R_WE=R_WE, q_j=q_j)
     failed = residual.violations(tol_m=tolerance, tol_rad=tolerance,
                                  joint_limits=respect_joint_limits)
     if failed:
@@ -94,15 +124,16 @@ def solve_configuration(manip: AerialManipulator, *, p_WG: np.ndarray, R_WB: np.
             "no configuration meets the requested pose; failing constraints: "
             + ", ".join(failed) + f" (solver: {result.get_solver_id().name()}, "
             f"{result.get_solution_result()}). Move the end effector closer to the "
-            "helicopter's CoM offset the model supports (docs/models.md).")
+            "vehicle's CoM offset the arm supports (its nominal posture's).")
     return q_sol
 
 
-def _newton_polish(manip: AerialManipulator, q: np.ndarray, *, p_WG, R_WB, p_WE, R_WE, q3,
+def _newton_polish(manip: AerialManipulator, q: np.ndarray, *, p_WG, R_WB, p_WE, R_WE, q_j,
                    iterations: int = 8) -> np.ndarray:
-    """Newton steps on the square system (CoM, EE pose, q3 in base position and joints), with
+    """Newton steps on the square system (CoM and the task in base position and joints), with
     the base attitude set exactly: IK's orientation constraints are only met to ~1e-5 rad."""
     plant = manip.plant
+    task = _task(manip)
     ctx = plant.CreateDefaultContext()
     plant.SetPositions(ctx, q)
     p_WB = plant.EvalBodyPoseInWorld(ctx, manip.base_body).translation()
@@ -116,24 +147,24 @@ def _newton_polish(manip: AerialManipulator, q: np.ndarray, *, p_WG, R_WB, p_WE,
     base_q = manip.base_position_indices[-3:]  # translation coordinates
     cols = np.concatenate([manip.base_velocity_indices[3:], manip.arm_velocity_indices])
     unknowns = np.concatenate([base_q, manip.arm_position_indices])
-    i3 = manip.arm_joints[2]
     world, frame = plant.world_frame(), manip.end_effector_frame
     kV = JacobianWrtVariable.kV
+    nv = plant.num_velocities()
     for _ in range(iterations):
         plant.SetPositions(ctx, q)
-        X_WE = frame.CalcPoseInWorld(ctx)
-        r = np.concatenate([
-            plant.CalcCenterOfMassPositionInWorld(ctx) - p_WG,
-            X_WE.translation() - p_WE,
-            vee(X_WE.rotation().matrix() @ np.asarray(R_WE).T),
-            [q[i3.position_start()] - q3]])
+        r = np.concatenate([plant.CalcCenterOfMassPositionInWorld(ctx) - p_WG,
+                            task_residual(manip, ctx, q, p_WE, R_WE, q_j)])
         if np.abs(r).max() < 1e-13:
             break
-        J = np.zeros((10, plant.num_velocities()))
+        J = np.zeros((3 + task.n, nv))
         J[0:3] = plant.CalcJacobianCenterOfMassTranslationalVelocity(ctx, kV, world, world)
         Jv = plant.CalcJacobianSpatialVelocity(ctx, kV, frame, np.zeros(3), world, world)
-        J[3:6], J[6:9] = Jv[3:], Jv[:3]
-        J[9, i3.velocity_start()] = 1.0
+        J6 = np.vstack([Jv[3:], Jv[:3]])  # [v_E; w_E]
+        for i, row in enumerate(task.rows):
+            if row < POSE_ROWS:
+                J[3 + i] = J6[row]
+            else:
+                J[3 + i, task.joint_velocities[row - POSE_ROWS]] = 1.0
         step = np.linalg.lstsq(J[:, cols], r, rcond=None)[0]
         q[unknowns] -= step
     return q
@@ -145,24 +176,31 @@ def _rpy(R: np.ndarray) -> np.ndarray:
 
 def configuration_residual(manip: AerialManipulator, q: np.ndarray, *, p_WG: np.ndarray,
                            R_WB: np.ndarray, p_WE: np.ndarray, R_WE: np.ndarray,
-                           q3: float) -> ConfigurationResidual:
+                           q_j=()) -> ConfigurationResidual:
+    """How far ``q`` is from the CoM, base attitude and task of :func:`solve_configuration`
+    (the end effector's rows only as far as the task holds them)."""
     plant = manip.plant
+    task = _task(manip)
     ctx = plant.CreateDefaultContext()
     plant.SetPositions(ctx, q)
-    X_WE = manip.end_effector_frame.CalcPoseInWorld(ctx)
     R_actual = plant.EvalBodyPoseInWorld(ctx, manip.base_body).rotation()
     lower, upper = manip.arm_position_limits()
     q_arm = q[manip.arm_position_indices]
+    residual = task_residual(manip, ctx, q, p_WE, R_WE, q_j)
+    rows = np.array(task.rows)
+    X_WE = manip.end_effector_frame.CalcPoseInWorld(ctx)
 
     def angle(Ra: RotationMatrix, Rb: np.ndarray) -> float:
         return float(Ra.InvertAndCompose(RotationMatrix(Rb)).ToAngleAxis().angle())
 
+    orientation = (angle(X_WE.rotation(), R_WE) if task.has_full_orientation
+                   else float(np.linalg.norm(residual[(rows >= 3) & (rows < POSE_ROWS)])))
     return ConfigurationResidual(
         com=float(np.linalg.norm(plant.CalcCenterOfMassPositionInWorld(ctx) - p_WG)),
-        ee_position=float(np.linalg.norm(X_WE.translation() - p_WE)),
-        ee_orientation=angle(X_WE.rotation(), R_WE),
+        ee_position=float(np.linalg.norm(residual[rows < 3])),
+        ee_orientation=orientation,
         base_orientation=angle(R_actual, R_WB),
-        q3=abs(float(q[manip.arm_joints[2].position_start()]) - q3),
+        joints=float(np.max(np.abs(residual[rows >= POSE_ROWS]), initial=0.0)),
         joint_limits=float(np.max(np.maximum(lower - q_arm, q_arm - upper), initial=0.0)))
 
 

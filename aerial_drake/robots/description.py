@@ -107,6 +107,9 @@ class RobotDescription:
     # Reflected drive inertia of each arm joint (kg m^2); empty: the model files' (Drake's
     # rotor_inertia times gear_ratio squared).
     reflected_inertia: list[float] = field(default_factory=list)
+    # How far (m) the desired end effector may stray from its nominal offset to the desired
+    # CoM (heading frame) before a scenario's reference is refused as out of the arm's reach.
+    workspace_radius: float = 0.2
     # Other plants to simulate (each a name and its model files).
     variants: list[PlantVariant] = field(default_factory=list)
 
@@ -168,6 +171,8 @@ class RobotDescription:
             if not all(_finite(x) and low_ok(x) for x in values):
                 fail(label, f"{values} must hold finite numbers "
                      f"{'> 0' if name == 'joint_effort' else '>= 0'} (or be empty)")
+        if not (_finite(self.workspace_radius) and self.workspace_radius > 0):
+            fail("workspace_radius", f"{self.workspace_radius} must be > 0 (m)")
         if not all(_finite(x) for x in self.nominal_posture):
             fail("nominal_posture", f"{self.nominal_posture} must hold finite angles (rad)")
         for k, off in (("end_effector.offset_xyz", self.end_effector.offset_xyz),

@@ -49,7 +49,7 @@ from aerial_drake.robots.description import (
     default_robot,
 )
 from aerial_drake.robots.resources import model_directory
-from aerial_drake.robots.task import POSE_ROWS, TaskLayout, parse_task
+from aerial_drake.robots.task import TaskLayout, parse_task
 
 FLOATING_BASES = ("quaternion", "rpy")
 
@@ -196,6 +196,14 @@ class AerialManipulator:
     def arm_velocity_limits(self) -> np.ndarray:
         """Joint speed limits of the arm [rad/s] (magnitude, symmetric)."""
         return np.array([j.velocity_upper_limit() for j in self.arm_joints])
+
+    def task_joint_nominal(self) -> np.ndarray:
+        """The nominal posture's angles at the task's joint components (task order) [rad]:
+        the default desired angles of those components."""
+        assert self.task is not None  # a finalized model
+        names = [j.name() for j in self.arm_joints]
+        q = self.q_nominal_arm()
+        return np.array([q[names.index(name)] for name in self.task.joint_names])
 
     def q_nominal_arm(self) -> np.ndarray:
         """The nominal hover posture of the arm [rad]: the description's, else the arm joints'

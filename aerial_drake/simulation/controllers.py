@@ -46,14 +46,14 @@ def zero_controller(scenario: Any, model: AerialManipulator):
 
 
 def body_offset_in_heading_frame(scenario: Any, model: AerialManipulator) -> np.ndarray:
-    """The CoM's offset from the helicopter body at the reference configuration of t = 0, in
+    """The CoM's offset from the vehicle body at the reference configuration of t = 0, in
     the heading frame [b1d, e3 x b1d, e3]: what the baselines' body reference keeps."""
     plant = model.plant
     ctx = plant.CreateDefaultContext()
     plant.SetPositions(ctx, reference_configuration(scenario, model))
     p_b = plant.EvalBodyPoseInWorld(ctx, model.base_body).translation()
     offset = plant.CalcCenterOfMassPositionInWorld(ctx) - p_b
-    b1 = evaluate_reference(scenario.trajectory, 0.0).b1d[0]
+    b1 = evaluate_reference(scenario.trajectory, 0.0, model.task_joint_nominal()).b1d[0]
     H = np.column_stack([b1, np.cross([0.0, 0.0, 1.0], b1), [0.0, 0.0, 1.0]])
     return H.T @ offset
 
@@ -61,10 +61,10 @@ def body_offset_in_heading_frame(scenario: Any, model: AerialManipulator) -> np.
 def _baseline(kind: str) -> ControllerFactory:
     def factory(scenario: Any, model: AerialManipulator):
         from aerial_drake.control.baselines.controller import BaselineController
-        q3 = model.arm_joints[2]
+        assert model.task is not None
         return BaselineController(
-            model.plant, model.base_body, model.end_effector_frame, q3.velocity_start(),
-            q3.position_start(), scenario.gains, kind=kind,
+            model.plant, model.base_body, model.end_effector_frame, model.task,
+            scenario.gains, kind=kind,
             body_offset_H=body_offset_in_heading_frame(scenario, model),
             params=scenario.controller.baseline, period=scenario.controller_period)
     return factory

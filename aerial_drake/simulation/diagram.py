@@ -38,12 +38,7 @@ from pydrake.systems.primitives import (
 
 from aerial_drake.control.controller import DecoupledController
 from aerial_drake.control.interface import check_controller_ports
-from aerial_drake.robots.models import (
-    ROTOR_DIRECTIONS,
-    AerialManipulator,
-    add_to_builder,
-    make_plant,
-)
+from aerial_drake.robots.models import AerialManipulator, add_to_builder
 from aerial_drake.simulation.actuators import (
     ActuatorLag,
     PointWrenchApplier,
@@ -98,25 +93,56 @@ def _port(ports: dict, name: str, kind: str):
 
 def input_limits(scenario: Scenario, model: AerialManipulator,
                  ) -> tuple[np.ndarray, np.ndarray]:
-    """Lower and upper limits of the applied ``[f, mu, tau]``: Table I's thrust and body torque
-    (scenario ``actuation``) and the arm's effort limits (model file); infinite where the
-    scenario does not saturate."""
+    """Lower and upper limits of the applied ``[f, mu, tau]``: the robot's thrust range and
+    body torque bounds (its description, or the scenario's ``actuation`` overrides) and the
+    arm's effort limits; infinite where the scenario does not saturate."""
     a = scenario.actuation
     effort = model.arm_effort_limits()
     if not a.saturate:
         inf = np.full(4 + effort.size, np.inf)
         return -inf, inf
-    tm = a.body_torque_max
-    lower = np.concatenate([[a.thrust_min, -tm, -tm, -tm], -effort])
-    upper = np.concatenate([[a.thrust_max, tm, tm, tm], effort])
+    low, high = model.thrust_limits()
+    low = low if np.isnan(a.thrust_min) else a.thrust_min
+    high = high if np.isnan(a.thrust_max) else a.thrust_max
+    tm = model.body_torque_limits()
+    if not np.isnan(a.body_torque_max):
+        tm = np.full(3, a.body_torque_max)
+    lower = np.concatenate([[low], -tm, -effort])
+    upper = np.concatenate([[high], tm, effort])
     return lower, upper
+
+
+def _actuation_port(builder: DiagramBuilder, sim: AerialManipulator, actuators, name: str
+                    ) -> InputPort:
+    """Where a vector of torques for ``actuators`` (in that order) enters the plant: their
+    model instance's actuation port when they are exactly its actuators in order (no system
+    in between), else a MatrixGain into the whole plant's actuation port (summed by Drake
+    with the per-instance ports)."""
+    plant = sim.plant
+    instance = actuators[0].model_instance()
+    own = [plant.get_joint_actuator(i) for i in plant.GetJointActuatorIndices(instance)]
+    if [a.index() for a in own] == [a.index() for a in actuators]:
+        return plant.get_actuation_input_port(instance)
+    whole = plant.get_actuation_input_port()
+    if builder.IsConnectedOrExported(whole):
+        raise NotImplementedError(
+            f"the {name} actuators share model instances with others in an order that needs "
+            "a second connection to the plant's actuation port; put them in a model of their "
+            "own")
+    place = np.zeros((plant.num_actuated_dofs(), len(actuators)))
+    for k, actuator in enumerate(actuators):
+        place[actuator.input_start(), k] = 1.0
+    gain = builder.AddSystem(MatrixGain(place))
+    gain.set_name(f"{name}_actuation")
+    builder.Connect(gain.get_output_port(), whole)
+    return gain.get_input_port()
 
 
 def connect_actuation(builder: DiagramBuilder, sim: AerialManipulator, base_command: OutputPort,
                       joint_command: OutputPort) -> OutputPort:
     """Wire ``[f, mu]`` (``base_command``, 4) and ``tau`` (``joint_command``) to the plant:
-    the thrust and body torques as a body wrench at the helicopter frame (2) through Drake's
-    ``Propeller``, the joint torques to the arm's actuation input. Returns the base wrench's
+    the thrust and body torques as a body wrench at the vehicle frame (2) through Drake's
+    ``Propeller``, the joint torques to the arm's actuators. Returns the base wrench's
     spatial-force output port, for the caller to connect to the plant (alone or multiplexed).
 
     MultibodyPlant silently clips actuation at the joints' effort limits, even in continuous
@@ -131,7 +157,7 @@ def connect_actuation(builder: DiagramBuilder, sim: AerialManipulator, base_comm
     builder.Connect(base_command, base_actuator.get_command_input_port())
     builder.Connect(sim.plant.get_body_poses_output_port(),
                     base_actuator.get_body_poses_input_port())
-    builder.Connect(joint_command, sim.plant.get_actuation_input_port(sim.arm))
+    builder.Connect(joint_command, _actuation_port(builder, sim, sim.arm_actuators, "arm"))
     return base_actuator.get_spatial_forces_output_port()
 
 
@@ -196,13 +222,15 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
     """Add the systems of the closed loop of ``scenario`` to ``builder`` (its disturbance
     inputs left to connect); the returned :class:`ClosedLoop` names its ports."""
     inputs, outputs = {}, {}
-    sim = add_to_builder(builder, scenario.plant_variant, time_step=0.0)
+    robot = scenario.robot_description()
+    sim = add_to_builder(builder, scenario.plant_variant, time_step=0.0, robot=robot)
     plant = sim.plant
     plant.set_name("plant")
-    model = make_plant("rigid")
-    n = len(model.arm_joints)
+    model = scenario.controller_model()
+    n = model.n
 
-    reference = builder.AddSystem(ReferenceGenerator(scenario.trajectory))
+    reference = builder.AddSystem(ReferenceGenerator(
+        scenario.trajectory, joint_defaults=model.task_joint_nominal()))
     reference.set_name("reference")
     # Sampling: the paper's controller runs at 1 kHz and holds its command between samples
     # (its own discrete state); period 0 means continuous feedback.
@@ -210,7 +238,8 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
     # caller's factory (aerial_drake.simulation.controllers).
     factory = controller_factory or scenario_controller_factory(scenario)
     system = factory(scenario, model)
-    check_controller_ports(system, model.plant.num_multibody_states(), n)
+    assert model.task is not None
+    check_controller_ports(system, model.plant.num_multibody_states(), n, model.task.n_joints)
     controller = builder.AddSystem(system)
     controller.set_name("controller")
     for port in ("com_reference", "task_reference", "heading_reference"):
@@ -218,11 +247,11 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
         outputs[port] = reference.GetOutputPort(port)
 
     state_out = plant.get_state_output_port()
-    if scenario.plant_variant == "rigid":
+    nx = sim.plant.num_multibody_states()
+    if np.array_equal(sim.rigid_state_indices, np.arange(nx)):
         builder.Connect(state_out, controller.GetInputPort("state"))
     else:
-        # The rotors plant's state without the rotors' coordinates is the rigid model's.
-        nx = sim.plant.num_multibody_states()
+        # The variant's state without its rotors' coordinates is the rigid model's.
         selector = builder.AddSystem(MatrixGain(np.eye(nx)[sim.rigid_state_indices]))
         selector.set_name("model_state")
         builder.Connect(state_out, selector.get_input_port())
@@ -279,14 +308,15 @@ def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: 
     nq = plant.num_positions()
     k = len(sim.rotor_joints)
     gain = scenario.rotors.drive_gain
-    speeds = scenario.rotors.speed * np.array(ROTOR_DIRECTIONS)[:k]
+    speeds = scenario.rotors.speed * np.array(sim.rotor_directions)
     D = np.zeros((k, plant.num_multibody_states()))
     for i, joint in enumerate(sim.rotor_joints):
         D[i, nq + joint.velocity_start()] = -gain
     drive = builder.AddSystem(AffineSystem(D=D, y0=gain * speeds))
     drive.set_name("rotor_drive")
     builder.Connect(plant.get_state_output_port(), drive.get_input_port())
-    builder.Connect(drive.get_output_port(), plant.get_actuation_input_port(sim.helicopter))
+    builder.Connect(drive.get_output_port(),
+                    _actuation_port(builder, sim, sim.rotor_actuators, "rotor"))
     return drive.get_output_port()
 
 

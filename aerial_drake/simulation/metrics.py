@@ -6,9 +6,12 @@ from typing import Any
 
 import numpy as np
 
-from aerial_drake.control.law import diagnostics_slices
+from aerial_drake.control.law import diagnostics_slices, task_size_of_diagnostics
 
-INPUT_NAMES = ("thrust", "mu_x", "mu_y", "mu_z") + tuple(f"tau_{i}" for i in range(1, 8))
+
+def input_names(n: int) -> tuple[str, ...]:
+    """Names of the inputs ``[f, mu, tau]`` of a robot with ``n`` arm joints."""
+    return ("thrust", "mu_x", "mu_y", "mu_z") + tuple(f"tau_{i}" for i in range(1, n + 1))
 
 _ERRORS = {
     # metric name -> diagnostics entry
@@ -41,12 +44,13 @@ def compute_metrics(t: np.ndarray, diagnostics: np.ndarray, applied: np.ndarray,
     """Per-phase RMS/max errors, assumption margins and saturated time.
 
     Args:
-        t: sample times (N); diagnostics: (N, DIAGNOSTICS_SIZE); applied: (N, 11) inputs that
-        reached the plant; lower/upper: (11) input limits; edges: phase boundaries (s).
+        t: sample times (N); diagnostics: (N, 23 + 2 n); applied: (N, 4 + n) inputs that
+        reached the plant; lower/upper: (4 + n) input limits; edges: phase boundaries (s).
         saturation_grace: the saturated time after this instant is reported separately, as
         the paper allows saturation only in a short initial interval.
     """
-    sl = diagnostics_slices()
+    sl = diagnostics_slices(task_size_of_diagnostics(diagnostics.shape[1]))
+    names = input_names(applied.shape[1] - 4)
     bounds = np.abs(np.concatenate([lower, upper]))
     tol = 1e-9 * max(1.0, bounds[np.isfinite(bounds)].max(initial=1.0))
     at_limit = (applied <= lower + tol) | (applied >= upper - tol)
@@ -61,16 +65,16 @@ def compute_metrics(t: np.ndarray, diagnostics: np.ndarray, applied: np.ndarray,
                 phase[key] = {"rms": float(np.sqrt(np.mean(e ** 2))), "max": float(e.max())}
             phase["min_sigma_min_J3"] = float(diagnostics[mask, sl["sigma_min_J3"]].min())
             phase["min_f_d_norm_N"] = float(diagnostics[mask, sl["f_d_norm"]].min())
-            phase["saturated_s"] = dict(zip(INPUT_NAMES,
+            phase["saturated_s"] = dict(zip(names,
                                             (at_limit[mask].sum(axis=0) * log_period).tolist()))
         phases.append(phase)
     late = t >= saturation_grace
     return {
         "phases": phases,
-        "saturated_s_total": dict(zip(INPUT_NAMES,
+        "saturated_s_total": dict(zip(names,
                                       (at_limit.sum(axis=0) * log_period).tolist())),
         saturated_after_key(saturation_grace): dict(
-            zip(INPUT_NAMES, (at_limit[late].sum(axis=0) * log_period).tolist())),
+            zip(names, (at_limit[late].sum(axis=0) * log_period).tolist())),
         # None when nothing was logged (a run stopped at t = 0).
         "min_sigma_min_J3": _min_or_none(diagnostics[:, sl["sigma_min_J3"]]),
         "min_f_d_norm_N": _min_or_none(diagnostics[:, sl["f_d_norm"]]),
@@ -94,7 +98,7 @@ def disturbance_response(t: np.ndarray, diagnostics: np.ndarray,
     helicopter barely moves the end effector (Fig. 3 against Fig. 4). Peaks are None when the
     log does not reach the window.
     """
-    sl = diagnostics_slices()
+    sl = diagnostics_slices(task_size_of_diagnostics(diagnostics.shape[1]))
     ee = diagnostics[:, sl["ee_position_error"]][:, 0]
     com = diagnostics[:, sl["com_error"]][:, 0]
     starts = sorted(s for _, s, _ in windows)
@@ -143,7 +147,8 @@ def limits_by_input(lower: np.ndarray, upper: np.ndarray) -> dict:
     """``{input name: [lower, upper]}``, None for an unbounded side (JSON has no infinity)."""
     def finite(x):
         return float(x) if np.isfinite(x) else None
-    return {name: [finite(lo), finite(hi)] for name, lo, hi in zip(INPUT_NAMES, lower, upper)}
+    names = input_names(len(lower) - 4)
+    return {name: [finite(lo), finite(hi)] for name, lo, hi in zip(names, lower, upper)}
 
 
 def _min_or_none(x: np.ndarray) -> float | None:

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from aerial_drake.control.interface import required_diagnostics_columns
+from aerial_drake.control.law import task_size_of_diagnostics
 
 #: The logged signals searched for the first non-finite value, in the loop's order (the
 #: references are computed from the time alone and finite by construction).
@@ -25,7 +26,8 @@ def _checked(name: str, values: np.ndarray) -> np.ndarray:
     """The part of a signal that must be finite: all of it, but for the diagnostics only the
     entries every controller fills (control.interface: a baseline leaves others NaN)."""
     if name == "diagnostics":
-        return values[..., required_diagnostics_columns()]
+        n = task_size_of_diagnostics(values.shape[-1])
+        return values[..., required_diagnostics_columns(n)]
     return values
 
 

@@ -4,7 +4,7 @@ reference is measured from (:mod:`aerial_drake.simulation.controllers`)."""
 
 from __future__ import annotations
 
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 
@@ -18,9 +18,10 @@ def reference_configuration(scenario: Any, model: AerialManipulator,
                             t: float = 0.0) -> np.ndarray:
     """Positions of ``model`` that realise ``scenario``'s reference at time ``t`` exactly: CoM
     on x_d, base attitude R_d of (13) for zero CoM error, end effector on (p_ed, R_ed),
-    q3 = q3d. (``scenario`` a :class:`~aerial_drake.simulation.scenarios.Scenario`; not
-    imported here, as the scenarios import the controllers, which import this.)"""
-    ref = evaluate_reference(scenario.trajectory, t)
+    the task's joints at their targets. (``scenario`` a
+    :class:`~aerial_drake.simulation.scenarios.Scenario`; not imported here, as the scenarios
+    import the controllers, which import this.)"""
+    ref = evaluate_reference(scenario.trajectory, t, model.task_joint_nominal())
     m = model.plant.CalcTotalMass(model.plant.CreateDefaultContext())
     g = -model.plant.gravity_field().gravity_vector()[2]
     x = ref.com
@@ -31,7 +32,7 @@ def reference_configuration(scenario: Any, model: AerialManipulator,
     # Joint limits are not imposed: the simulated plant does not enforce them, and at t = 0 the
     # paper's reference needs joint 6 about 0.19 rad past its 120 deg (docs/control.md).
     return solve_configuration(model, p_WG=x[0], R_WB=R_d, p_WE=ref.p_ed, R_WE=ref.R_ed,
-                               q3=cast(float, ref.q3d),  # one instant: a scalar
+                               q_j=ref.q_jd,
                                respect_joint_limits=False)
 
 

@@ -19,17 +19,10 @@ from pydrake.systems.framework import Context
 from pydrake.systems.primitives import VectorLogSink
 
 from aerial_drake.control.compiled import compile_law
-from aerial_drake.control.law import (
-    DIAGNOSTICS_LAYOUT,
-    AssumptionViolation,
-)
-from aerial_drake.robots.models import (
-    ROTOR_DIRECTIONS,
-    AerialManipulator,
-    nominal_end_effector_offset,
-)
+from aerial_drake.control.law import AssumptionViolation, diagnostics_layout
 from aerial_drake.simulation.controllers import ControllerFactory
 from aerial_drake.simulation.diagram import ClosedLoop, build_simulation, input_limits
+from aerial_drake.simulation.feasibility import check_start_posture, check_workspace
 from aerial_drake.simulation.interrupts import deferred, handling, signal_name
 from aerial_drake.simulation.metrics import (
     compute_metrics,
@@ -54,6 +47,9 @@ from aerial_drake.simulation.reference_pose import reference_configuration
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
 from aerial_drake.simulation.scenarios.checks import REALTIME, estimated_log_mb, number
 from aerial_drake.trajectories.paper import compile_reference, sample_reference
+
+#: Diagnostics entries that do not depend on the task's size (diagnostics_layout(0)).
+_BASE_DIAGNOSTICS = sum(size for _, size in diagnostics_layout(0))
 
 
 class SimulationFailed(RuntimeError):
@@ -82,38 +78,8 @@ class RunResult:
     completed: bool = True
     failure: str | None = None
     out_dir: Path | None = None
-
-
-#: How far (m) the desired end effector may stray from its nominal offset to the desired CoM,
-#: in the heading frame: the mount was chosen to keep J_3 conditioned 0.1 m and 0.5 rad away
-#: from nominal (docs/models.md); beyond 0.2 m the arm nears its reach or a singularity.
-WORKSPACE_RADIUS = 0.2
-
-
-def check_workspace(scenario: Scenario, model: AerialManipulator, *,
-                    radius: float = WORKSPACE_RADIUS, rate: float = 50.0) -> None:
-    """Raise ScenarioError if the reference leaves the arm's workspace at any sampled time.
-
-    The arm holds the end effector at a fixed offset from the system CoM in the heading frame
-    (x_d = x_c + R3(phi4) r_o, (33)); the task is feasible while the desired offset
-    R3(phi4)^T (p_ed - x_d) stays within ``radius`` of the model's nominal one.
-    """
-    nominal = nominal_end_effector_offset(model)
-    times = np.linspace(0.0, scenario.duration, int(scenario.duration * rate) + 1)
-    ref = sample_reference(scenario.trajectory, times)
-    offset = ref.p_ed - ref.com[:, 0]
-    b1 = ref.b1d[:, 0]  # heading direction (unit, horizontal)
-    x_h = np.einsum("ti,ti->t", offset, b1)
-    y_h = -offset[:, 0] * b1[:, 1] + offset[:, 1] * b1[:, 0]
-    dev = np.linalg.norm(np.column_stack([x_h, y_h, offset[:, 2]]) - nominal, axis=1)
-    worst = int(np.argmax(dev))
-    if dev[worst] > radius:
-        raise ScenarioError(
-            f"trajectory: the desired end effector leaves the arm's workspace at t = "
-            f"{times[worst]:.2f} s: it is {dev[worst]:.3f} m from its nominal offset "
-            f"{np.round(nominal, 3).tolist()} m to the desired CoM (heading frame; limit "
-            f"{radius} m). Reduce trajectory.agile_amplitude or keep trajectory.com_offset "
-            "near the model's nominal offset.")
+    #: One name per task row (robots.task.TaskLayout.labels), stored with the log's layout.
+    task_labels: tuple[str, ...] = ()
 
 
 def set_initial_state(scenario: Scenario, loop: ClosedLoop, plant_context: Context) -> None:
@@ -130,7 +96,7 @@ def set_initial_state(scenario: Scenario, loop: ClosedLoop, plant_context: Conte
     sim.plant.SetFreeBodyPose(plant_context, sim.base_body, RigidTransform(R0, p0))
     for joint, mj, offset in zip(sim.arm_joints, model.arm_joints, init.arm_offset):
         joint.set_angle(plant_context, q_model[mj.position_start()] + offset)
-    for joint, sign in zip(sim.rotor_joints, ROTOR_DIRECTIONS):
+    for joint, sign in zip(sim.rotor_joints, sim.rotor_directions):
         joint.set_angular_rate(plant_context, sign * scenario.rotors.speed)
 
 
@@ -247,7 +213,8 @@ def _collect_log(scenario: Scenario, loop: ClosedLoop, loggers: dict[str, Vector
         arrays[port] = entry.data().T
     n = min(len(v) for v in arrays.values())
     arrays = {k: v[:n] for k, v in arrays.items()}
-    references = sample_reference(scenario.trajectory, arrays["t"]).to_vectors()
+    references = sample_reference(scenario.trajectory, arrays["t"],
+                                  loop.controller_model.task_joint_nominal()).to_vectors()
     arrays.update(zip(("com_reference", "task_reference", "heading_reference"), references))
     if _period(loop.controller) > 0 and n > 0:
         arrays = _align_held_diagnostics(arrays, loop)
@@ -367,6 +334,9 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
     context = simulator.get_mutable_context()
     plant_context = loop.simulated_plant.plant.GetMyMutableContextFromRoot(context)
     set_initial_state(scenario, loop, plant_context)
+    x0 = loop.simulated_plant.plant.GetPositionsAndVelocities(plant_context)
+    check_start_posture(scenario, loop.controller_model,
+                        x0[loop.simulated_plant.rigid_state_indices])
     if before_start is not None:
         before_start()
     progress_lines = _Progress(scenario.duration, stream if progress else None)
@@ -442,7 +412,7 @@ def _metrics(scenario: Scenario, loop: ClosedLoop, log: dict, wall: float,
         nq = sim.plant.num_positions()
         metrics["rotors"] = rotor_metrics(
             log["plant_state"][:, nq + sim.rotor_velocity_indices], log["rotor_drive_torque"],
-            scenario.rotors.speed * np.array(ROTOR_DIRECTIONS))
+            scenario.rotors.speed * np.array(sim.rotor_directions))
     return metrics
 
 
@@ -454,7 +424,10 @@ def write_outputs(result: RunResult, out_dir: str | Path,
     leaves none of them (OutputError)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    names = json.dumps({"diagnostics": [list(x) for x in DIAGNOSTICS_LAYOUT]})
+    n = (result.log["diagnostics"].shape[1] - _BASE_DIAGNOSTICS) // 2 \
+        if "diagnostics" in result.log else 0
+    names = json.dumps({"diagnostics": [list(x) for x in diagnostics_layout(n)],
+                        "task": list(result.task_labels)})
     arrays: dict[str, Any] = dict(result.log)  # (typed Any: numpy's stub has a bool keyword)
     metrics = dict(result.metrics)
     metrics["completed"] = result.completed

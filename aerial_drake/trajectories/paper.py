@@ -41,7 +41,8 @@ from aerial_drake.trajectories.reference import (
     packed_slices,
 )
 
-__all__ = ["TrajectoryParams", "constants", "evaluate_reference", "sample_reference", "compile_reference"]
+__all__ = ["TrajectoryParams", "constants", "evaluate_reference", "sample_reference",
+           "compile_reference"]
 
 
 @dataclasses.dataclass
@@ -363,7 +364,8 @@ def _fill_reference(k: np.ndarray, t: float, out: np.ndarray) -> None:
 
 @numba.njit(cache=True)
 def _fill_reference_over_time(k: np.ndarray, times: np.ndarray, out: np.ndarray) -> None:
-    """:func:`_fill_reference` at each of the N ``times``, into the rows of ``out`` (N, 48 + 3 n_j)."""
+    """:func:`_fill_reference` at each of the N ``times``, into the rows of ``out``
+    (N, 48 + 3 n_j)."""
     for i in range(times.size):
         _fill_reference(k, times[i], out[i])
 

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from matplotlib.figure import Figure
 
-from aerial_drake.simulation.metrics import INPUT_NAMES
+from aerial_drake.simulation.metrics import input_names
 from aerial_drake.viz import plots
 from aerial_drake.viz.plots import FORMATS, Run, Series
 
@@ -65,7 +65,7 @@ def figure_inputs(runs: dict[str, Run], scenario_name: str = "") -> Figure:
     overlaid = controller_series(runs)
     first = overlaid[0][0]
     n_inputs = first.log["applied_command"].shape[1]
-    names = list(INPUT_NAMES[:n_inputs])
+    names = list(input_names(n_inputs - 4))
     fig, axes = plots._new_figure(n_inputs, 1.3 * n_inputs + 1.5)
     limits = first.input_limits()
     for k, ax in enumerate(axes):

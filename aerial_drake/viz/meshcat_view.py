@@ -61,14 +61,14 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import Context, DiagramBuilder, EventStatus, LeafSystem
 
 from aerial_drake.control.law import desired_attitude, desired_force
-from aerial_drake.robots.models import AerialManipulator, helicopter_extent, make_plant
+from aerial_drake.robots.models import AerialManipulator, vehicle_extent
 from aerial_drake.simulation.diagram import ClosedLoop
 from aerial_drake.simulation.scenarios import Scenario
 from aerial_drake.trajectories.paper import sample_reference
 from aerial_drake.trajectories.reference import (
     COM_REFERENCE_SIZE,
     HEADING_REFERENCE_SIZE,
-    TASK_REFERENCE_SIZE,
+    task_reference_size,
     unpack_com_reference,
     unpack_heading_reference,
     unpack_task_reference,
@@ -171,13 +171,14 @@ CAMERA_FILL = 0.9
 
 def robot_envelope(scenario: Scenario) -> np.ndarray:
     """Points (N, 3) the robot reaches over the run if it tracks: the desired end-effector
-    path, and about each desired CoM the helicopter's lowest point (the skids) and a ring at
-    its highest (the rotor discs' outer rims) as wide as the helicopter, both from the model
-    (:func:`aerial_drake.robots.models.helicopter_extent` of the scenario's plant variant: the
-    helicopter level at the nominal posture; the ring holds any heading)."""
-    extent = helicopter_extent(scenario.plant_variant)
+    path, and about each desired CoM the vehicle's lowest point (the helicopter's skids) and a
+    ring at its highest (its rotor discs' outer rims) as wide as the vehicle, both from the
+    model (:func:`aerial_drake.robots.models.vehicle_extent` of the scenario's plant variant:
+    the vehicle level at the nominal posture; the ring holds any heading)."""
+    extent = vehicle_extent(scenario.plant_variant, scenario.robot_description())
     times = np.linspace(0.0, scenario.duration, int(scenario.duration * PATH_RATE / 5) + 2)
-    ref = sample_reference(scenario.trajectory, times)
+    ref = sample_reference(scenario.trajectory, times, scenario.controller_model()
+                           .task_joint_nominal())
     G = ref.com[:, 0]
     angles = np.linspace(0.0, 2 * np.pi, 12, endpoint=False)
     rim = np.column_stack([extent.radius * np.cos(angles), extent.radius * np.sin(angles),
@@ -229,12 +230,12 @@ class TrackingOverlay(LeafSystem):
     sources, as :meth:`MeshcatView.configure` does):
 
     - ``plant_state``: the simulated plant's state (either variant).
-    - ``com_reference`` (15), ``task_reference`` (27), ``heading_reference`` (9).
+    - ``com_reference`` (15), ``task_reference`` (24 + 3 n_j), ``heading_reference`` (9).
     - ``helicopter_wrench``, ``end_effector_wrench``: ``[torque; force]`` in World (6).
 
     A periodic publish (``publish_period``) sends every pose with the simulation time as the
     recording time; an initialization publish (re)draws the static objects. The actual
-    end-effector pose and CoM come from the rigid model (``models.make_plant("rigid")``) in
+    end-effector pose and CoM come from the robot's rigid model (the controller's) in
     this system's own context, fed with the simulated state mapped by ``rigid_state_indices``.
     """
 
@@ -243,7 +244,7 @@ class TrackingOverlay(LeafSystem):
         super().__init__()
         self._meshcat = meshcat
         self._prefix = prefix
-        self._model = make_plant("rigid")
+        self._model = scenario.controller_model()
         plant = self._model.plant
         self._context = plant.CreateDefaultContext()
         self._state_indices = simulated_plant.rigid_state_indices
@@ -253,7 +254,7 @@ class TrackingOverlay(LeafSystem):
         self._D_x = np.asarray(scenario.gains.D_x, dtype=float)
         times = np.linspace(0.0, scenario.duration,
                             int(round(scenario.duration * PATH_RATE)) + 1)
-        ref = sample_reference(scenario.trajectory, times)
+        ref = sample_reference(scenario.trajectory, times, self._model.task_joint_nominal())
         self._ee_path, self._com_path = ref.p_ed.T.copy(), ref.com[:, 0].T.copy()
         # arrow path -> visible, to send a visibility only when it changes
         self._shown: dict[str, bool] = {}
@@ -261,7 +262,9 @@ class TrackingOverlay(LeafSystem):
         nx = simulated_plant.plant.num_positions() + simulated_plant.plant.num_velocities()
         self._state_port = self.DeclareVectorInputPort("plant_state", nx)
         self._com_port = self.DeclareVectorInputPort("com_reference", COM_REFERENCE_SIZE)
-        self._task_port = self.DeclareVectorInputPort("task_reference", TASK_REFERENCE_SIZE)
+        assert self._model.task is not None
+        self._task_port = self.DeclareVectorInputPort(
+            "task_reference", task_reference_size(self._model.task.n_joints))
         self._heading_port = self.DeclareVectorInputPort("heading_reference",
                                                          HEADING_REFERENCE_SIZE)
         self._heli_port = self.DeclareVectorInputPort("helicopter_wrench", 6)

@@ -39,8 +39,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from aerial_drake.control.law import diagnostics_slices
-from aerial_drake.simulation.metrics import INPUT_NAMES
+from aerial_drake.control.law import diagnostics_slices, task_size_of_diagnostics
+from aerial_drake.simulation.metrics import input_names
 from aerial_drake.simulation.scenarios import Scenario, load_scenario
 from aerial_drake.trajectories.reference import unpack_com_reference, unpack_task_reference
 
@@ -95,7 +95,7 @@ class Run:
 def _diagnostics_slices(log: dict) -> dict[str, slice]:
     """The diagnostics layout a log was written with (this version's if it has none)."""
     if "layout" not in log:
-        return diagnostics_slices()
+        return diagnostics_slices(task_size_of_diagnostics(log["diagnostics"].shape[1]))
     return diagnostics_slices(json.loads(str(log["layout"]))["diagnostics"])
 
 
@@ -316,7 +316,7 @@ def figure_inputs(run: Run) -> Figure:
     u = run.log["applied_command"]
     t = run.t
     limits = run.input_limits()
-    index = {name: k for k, name in enumerate(INPUT_NAMES)}
+    index = {name: k for k, name in enumerate(input_names(u.shape[1] - 4))}
     rows = [r for r in INPUT_ROWS if all(index[n] < u.shape[1] for n in r)]
     fig = Figure(figsize=(10.0, 1.35 * len(rows) + 1.2), dpi=DPI, layout="constrained")
     FigureCanvasAgg(fig)

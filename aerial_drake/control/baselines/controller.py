@@ -23,19 +23,25 @@ from aerial_drake.control.baselines.vehicle import (
     geometric_vehicle_law,
     static_arm_moment,
 )
-from aerial_drake.control.controller import NONFINITE_STATE, _at_time, _ControllerPorts
+from aerial_drake.control.controller import (
+    NONFINITE_STATE,
+    _at_time,
+    _ControllerPorts,
+    task_jacobian,
+)
 from aerial_drake.control.interface import error_diagnostics
 from aerial_drake.control.law import (
-    DIAGNOSTICS_SIZE,
     AssumptionViolation,
     GainMatrices,
     Gains,
+    diagnostics_size,
     task_error,
 )
+from aerial_drake.robots.task import TaskLayout
 from aerial_drake.trajectories.reference import (
     COM_REFERENCE_SIZE,
     HEADING_REFERENCE_SIZE,
-    TASK_REFERENCE_SIZE,
+    task_reference_size,
     unpack_com_reference,
     unpack_heading_reference,
     unpack_task_reference,
@@ -47,7 +53,7 @@ class BaselineController(_ControllerPorts, LeafSystem):
     controller's rigid model.
 
     Args:
-        plant, base_body, end_effector_frame, q3 indices: the model and its task (as
+        plant, base_body, end_effector_frame, task: the model and its task (as
             :class:`~aerial_drake.control.controller.DecoupledController`).
         gains: Table II's gains: K_x, D_x for the body position, k_R, k_w for its attitude,
             K_y, K_z for the arm's task (``Lambda2_bar`` unused: the vehicle's inertia is).
@@ -59,7 +65,7 @@ class BaselineController(_ControllerPorts, LeafSystem):
     """
 
     def __init__(self, plant: MultibodyPlant, base_body: RigidBody, end_effector_frame: Frame,
-                 q3_joint_velocity_index: int, q3_joint_position_index: int, gains: Gains, *,
+                 task: TaskLayout, gains: Gains, *,
                  kind: str, body_offset_H: np.ndarray, params: BaselineParams | None = None,
                  period: float = 0.0):
         super().__init__()
@@ -74,7 +80,7 @@ class BaselineController(_ControllerPorts, LeafSystem):
         nv = plant.num_velocities()
         self._n = nv - 6
         self._K = GainMatrices.from_gains(gains, n_task=self._n)
-        self._q3_v, self._q3_q = q3_joint_velocity_index, q3_joint_position_index
+        self._task = task
         self._arm_v = np.arange(6, nv)
         self._offset_H = np.asarray(body_offset_H, dtype=float)
         self._m = float(plant.CalcTotalMass(self._ctx))
@@ -90,9 +96,10 @@ class BaselineController(_ControllerPorts, LeafSystem):
         nx = plant.num_positions() + nv
         self._state_port = self.DeclareVectorInputPort("state", nx)
         self._ref_ports = tuple(self.DeclareVectorInputPort(name, size) for name, size in (
-            ("com_reference", COM_REFERENCE_SIZE), ("task_reference", TASK_REFERENCE_SIZE),
+            ("com_reference", COM_REFERENCE_SIZE),
+            ("task_reference", task_reference_size(task.n_joints)),
             ("heading_reference", HEADING_REFERENCE_SIZE)))
-        sizes = (4 + self._n, DIAGNOSTICS_SIZE)
+        sizes = (4 + self._n, diagnostics_size(self._n))
         if self._period > 0.0:
             self._held = self._declare_held_outputs(sizes, self._sample)
             return
@@ -150,19 +157,21 @@ class BaselineController(_ControllerPorts, LeafSystem):
         plant.SetVelocities(ctx, v_fixed)
         J = plant.CalcJacobianSpatialVelocity(ctx, JacobianWrtVariable.kV, self._frame,
                                               np.zeros(3), world, world)
-        J_y = np.vstack([J[3:], J[:3], np.eye(v.size)[self._q3_v]])
+        rows = list(self._task.rows)
+        J_y, _ = task_jacobian(self._task, np.vstack([J[3:], J[:3]]), np.zeros((6, v.size)),
+                               v.size)
         y_dot = J_y @ v  # the measured task velocity, World (as the paper's (17))
         A = plant.CalcBiasSpatialAcceleration(ctx, JacobianWrtVariable.kV, self._frame,
                                               np.zeros(3), world, world)
         J_a = J_y[:, self._arm_v]
-        bias = np.concatenate([A.translational(), A.rotational(), [0.0]])
+        bias = np.concatenate([A.translational(), A.rotational(),
+                               np.zeros(self._task.n_joints)])[rows]
         M_aa = plant.CalcMassMatrix(ctx)[np.ix_(self._arm_v, self._arm_v)]
         h_a = (plant.CalcBiasTerm(ctx) - plant.CalcGravityGeneralizedForces(ctx))[self._arm_v]
-        q3 = float(x[self._q3_q])
-        y_t, _ = task_error(X_WE.translation(), X_WE.rotation().matrix(), q3, t.p_ed, t.R_ed,
-                            t.q3d)
-        y_d_dot = np.concatenate([t.v_ed, t.w_ed, [t.q3d_dot]])
-        y_d_ddot = np.concatenate([t.a_ed, t.dw_ed, [t.q3d_ddot]])
+        q_j = x[list(self._task.joint_positions)]
+        y_t, _ = task_error(X_WE.translation(), X_WE.rotation().matrix(), q_j, t.p_ed, t.R_ed,
+                            t.q_jd, rows)
+        y_d_dot, y_d_ddot = t.full_dot[rows], t.full_ddot[rows]
         arm = fixed_base_task_torque(J_a, bias, M_aa, h_a, y_dot, y_t, y_d_dot, y_d_ddot,
                                      K.K_y, K.K_z)
         if not arm.sigma_min > self._params.sigma_min_limit:
@@ -172,8 +181,9 @@ class BaselineController(_ControllerPorts, LeafSystem):
 
         command = np.concatenate([[veh.f], mu, arm.tau])
         diagnostics = error_diagnostics(
-            x_g=x_g, x_g_dot=x_g_dot, com_reference=com_ref, p_WE=X_WE.translation(),
-            R_WE=X_WE.rotation().matrix(), q3=q3, p_ed=t.p_ed, R_ed=t.R_ed, q3d=float(t.q3d),
+            task=self._task, x_g=x_g, x_g_dot=x_g_dot, com_reference=com_ref,
+            p_WE=X_WE.translation(), R_WE=X_WE.rotation().matrix(), q_j=q_j, p_ed=t.p_ed,
+            R_ed=t.R_ed, q_jd=t.q_jd,
             R_b=R, R_d=veh.R_d, e_R=veh.e_R, w_tilde=veh.e_w, z_tilde=arm.s,
             sigma_min_J3=arm.sigma_min, f_d_norm=veh.F_norm, thrust_residual=[0.0, 0.0])
         return command, diagnostics

@@ -20,10 +20,18 @@ from pydrake.systems.analysis import SimulatorConfig
 from aerial_drake.control.baselines.params import BaselineParams
 from aerial_drake.control.law import F_D_LIMIT, SIGMA_MIN_J3_LIMIT, Gains
 from aerial_drake.drake_compat import SimulatorFieldError, translate_simulator_section
-from aerial_drake.robots.models import PLANT_VARIANTS
+from aerial_drake.robots.description import (
+    DEFAULT_ROBOT,
+    RobotDescription,
+    RobotDescriptionError,
+    load_robot_description,
+    shipped_robots,
+)
+from aerial_drake.robots.models import AerialManipulator, make_plant
 from aerial_drake.simulation.controllers import PAPER_CONTROLLER, controller_types
 from aerial_drake.simulation.scenarios.checks import (
     DEFAULT_MAX_LOG_MB,
+    RobotFacts,
     ScenarioError,
     check_values,
     folder_name,
@@ -53,14 +61,15 @@ class Disturbance:
 @dataclass
 class InitialCondition:
     """The start: the configuration that realises the reference at t = 0 (CoM on x_d, base at
-    R_d, end effector on its desired pose, q3 = q3d), then these offsets; velocities zero."""
+    R_d, end effector on its desired pose, the task's joints at their targets), then these
+    offsets; velocities zero."""
 
     # Offset of the base (and so the whole robot) position (m), World axes.
     base_position_offset: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
     # Offset of the base attitude, roll-pitch-yaw about World axes (rad).
     base_rpy_offset: list[float] = field(default_factory=lambda: [0.0, 0.0, 0.0])
-    # Offsets of the seven arm joints (rad).
-    arm_offset: list[float] = field(default_factory=lambda: [0.0] * 7)
+    # Offsets of the arm's joints, one per joint (rad); empty: none.
+    arm_offset: list[float] = field(default_factory=list)
 
 
 @dataclass
@@ -69,12 +78,13 @@ class Actuation:
 
     # 10-90% rise time of the first-order lag on thrust and body torques (s); 0 = no lag.
     lag_rise_time: float = 0.0
-    # Saturate the applied inputs at the limits below and the arm's effort limits (model file).
+    # Saturate the applied inputs at the robot's limits (its description's ``limits``: thrust
+    # range, body torque bounds, the arm's effort limits), or at the overrides below.
     saturate: bool = True
-    # Thrust range (N), Table I: [0, 980.6]. No default: the scenario must say.
-    thrust_min: float = 0.0
+    # Overrides of the robot's thrust range (N) and body torque bound, each axis (N m); .nan
+    # (the default): the robot description's.
+    thrust_min: float = math.nan
     thrust_max: float = math.nan
-    # Body torque bound, each axis (N m), Table I: 200.
     body_torque_max: float = math.nan
 
 
@@ -107,7 +117,11 @@ class Scenario:
     # A short name (used for output folders).
     name: str = "unnamed"
     description: str = ""
-    # Simulated plant: "rigid" (the nominal rigid body) or "rotors" (spinning rotor bodies).
+    # The robot: a shipped robot's name (helicopter_lwr, ...) or the path of a robot
+    # description file (*.robot.yaml; relative to the scenario file). docs/robots.md.
+    robot: str = DEFAULT_ROBOT
+    # Simulated plant: "rigid" (the robot's own models, the controller's) or one of the
+    # robot's variants (the paper's robot: "rotors", with spinning rotor bodies).
     plant_variant: str = "rigid"
     # Simulated time (s).
     duration: float = 15.0
@@ -136,10 +150,17 @@ class Scenario:
         """Check every value (type, finiteness, range, consistency: :mod:`.checks`); raise
         ScenarioError naming the field, the value, the allowed range and the fix. Returns
         self."""
-        check_values(self, PLANT_VARIANTS, DISTURBANCE_TARGETS,
-                     {"K_x": 3, "D_x": 3, "Lambda2_bar": 3, "K_y": 7, "K_z": 7})
+        check_values(self, robot_facts(self), DISTURBANCE_TARGETS)
         self._validate_controller()
         return self
+
+    def robot_description(self) -> RobotDescription:
+        """The robot this scenario flies (ScenarioError naming ``robot`` if it is invalid)."""
+        return robot_description(self.robot)
+
+    def controller_model(self, floating_base: str = "quaternion") -> AerialManipulator:
+        """A fresh finalized plant of the robot's rigid model (the controller's)."""
+        return make_plant(floating_base=floating_base, robot=self.robot_description())
 
     def _validate_controller(self) -> None:
         if self.controller.type not in controller_types():
@@ -155,6 +176,49 @@ class Scenario:
     def folder_name(self) -> str:
         """The run folder's name: the name with unsafe characters replaced (never a path)."""
         return folder_name(self.name)
+
+
+def robot_description(robot: str) -> RobotDescription:
+    """The description named by a scenario's ``robot`` field (a shipped name or an absolute
+    path, as :func:`load_scenario` leaves it), read once per file version."""
+    path = shipped_robots().get(robot, Path(robot))
+    try:
+        stamp = path.stat().st_mtime_ns
+    except OSError:
+        stamp = -1
+    key = (str(path), stamp)
+    if key not in _DESCRIPTIONS:
+        try:
+            _DESCRIPTIONS[key] = load_robot_description(robot)
+        except RobotDescriptionError as err:
+            raise ScenarioError(f"robot: {err}", "robot" if err.field in (None, "robot")
+                                else f"robot: {err.field}") from None
+    return _DESCRIPTIONS[key]
+
+
+_DESCRIPTIONS: dict[tuple[str, int], RobotDescription] = {}
+_FACTS: dict[tuple[str, str], RobotFacts] = {}
+
+
+def robot_facts(scenario: Scenario) -> RobotFacts:
+    """Sizes and options of the scenario's robot, for the value checks (the robot's plant is
+    built, and its description checked, once per description)."""
+    description = robot_description(scenario.robot)
+    key = (str(description.source), repr(description))
+    if key not in _FACTS:
+        try:
+            model = make_plant(robot=description)
+            rotor_variants = tuple(v.name for v in description.variants if v.rotor_joints)
+            for variant in description.variant_names()[1:]:
+                make_plant(variant, robot=description)  # its checks, before any run
+        except RobotDescriptionError as err:
+            raise ScenarioError(f"robot: {err}", f"robot: {err.field}") from None
+        assert model.task is not None
+        _FACTS[key] = RobotFacts(n=model.n, n_task_joints=model.task.n_joints,
+                                 variants=description.variant_names(),
+                                 rotor_variants=rotor_variants,
+                                 thrust=model.thrust_limits())
+    return _FACTS[key]
 
 
 def _find_bad_field(data, schema, prefix: str = "") -> str | None:
@@ -245,6 +309,8 @@ def load_scenario(name_or_path: str | Path, *, overrides: dict | None = None) ->
             raise ScenarioError(f"no scenario named '{name_or_path}'; shipped scenarios: "
                                 f"{', '.join(sorted(shipped))}, or give a path to a .yaml file")
     text, data = read_scenario_file(path)
+    if _translate_old_fields(data):
+        text = yaml_dump(data)
     try:
         # A field only some Drake releases have: checked and removed in one place.
         if translate_simulator_section(data.get("simulator"), "simulator"):
@@ -263,10 +329,37 @@ def load_scenario(name_or_path: str | Path, *, overrides: dict | None = None) ->
                             where.split(" ")[0] if where else None) from None
     if overrides:
         scenario = apply_overrides(scenario, overrides)
+    scenario = _resolve_robot(scenario, path)
     try:
         return scenario.validate()
     except ScenarioError as err:
         raise ScenarioError(f"{path}: {err}", err.field) from None
+
+
+def _translate_old_fields(data: dict) -> bool:
+    """Fields of earlier releases, read as today's (run folders written before the robot
+    description keep loading): ``trajectory.q3_desired: x`` is ``joint_targets: [x]``.
+    Returns whether ``data`` changed."""
+    trajectory = data.get("trajectory")
+    if isinstance(trajectory, dict) and "q3_desired" in trajectory:
+        if "joint_targets" in trajectory:
+            raise ScenarioError("trajectory: q3_desired and joint_targets are both set: keep "
+                                "joint_targets (q3_desired is its earlier name)",
+                                "trajectory.q3_desired")
+        trajectory["joint_targets"] = [trajectory.pop("q3_desired")]
+        return True
+    return False
+
+
+def _resolve_robot(scenario: Scenario, path: Path) -> Scenario:
+    """``robot`` as a shipped name or an absolute path (a relative path starts at the
+    scenario file's folder), so the scenario written into a run folder finds it again."""
+    if scenario.robot in shipped_robots() or not isinstance(scenario.robot, str):
+        return scenario
+    robot = Path(scenario.robot).expanduser()
+    if not robot.is_absolute():
+        robot = (path.resolve().parent / robot).resolve()
+    return dataclasses.replace(scenario, robot=str(robot))
 
 
 def apply_overrides(scenario: Scenario, overrides: dict) -> Scenario:

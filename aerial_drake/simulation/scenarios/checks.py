@@ -156,7 +156,6 @@ TRAJECTORY = {
     "agile_frequency": (None, Range(0.0, 100.0, "rad/s", fix="the paper's is 3 rad/s")),
     "orientation_amplitudes": (3, Range(0.0, math.pi, "rad", fix="the paper's are 0.5 rad")),
     "orientation_frequency": (None, Range(0.0, 100.0, "rad/s", fix="the paper's is 3 rad/s")),
-    "q3_desired": (None, Range(-2 * math.pi, 2 * math.pi, "rad")),
     "heading_initial": (None, Range(-1e3, 1e3, "rad")),
     "heading_rate": (None, Range(-100.0, 100.0, "rad/s", fix="the paper's is 0.5 rad/s")),
     "com_offset": (3, Range(-10.0, 10.0, "m", fix="the paper's is [-0.3, 0, 0.6] m")),
@@ -178,9 +177,26 @@ def estimated_log_mb(duration: float, log_period: float) -> float:
     return samples * LOG_FLOATS_PER_SAMPLE * 8 / 1e6
 
 
-def check_values(s: Any, plant_variants: tuple[str, ...], targets: tuple[str, ...],
-                 gain_sizes: dict[str, int]) -> None:
-    """Check every field of scenario ``s`` (a :class:`Scenario`); raise ScenarioError."""
+JOINT_TARGET = Range(-2 * math.pi, 2 * math.pi, "rad")
+
+
+@dataclass(frozen=True)
+class RobotFacts:
+    """What the checks need to know of the scenario's robot (built from its description)."""
+
+    n: int  # arm joints = task rows
+    n_task_joints: int  # joint components of the task
+    variants: tuple[str, ...]
+    rotor_variants: tuple[str, ...]  # the variants with rotor joints
+    thrust: tuple[float, float]  # the robot's thrust range (N)
+
+
+def check_values(s: Any, robot: RobotFacts, targets: tuple[str, ...]) -> None:
+    """Check every field of scenario ``s`` (a :class:`Scenario`) for its ``robot``; raise
+    ScenarioError."""
+    n = robot.n
+    gain_sizes = {"K_x": 3, "D_x": 3, "Lambda2_bar": 3, "K_y": n, "K_z": n}
+    plant_variants = robot.variants
     text("name", s.name)
     if not folder_name(s.name):
         _fail("name", s.name, "a name with at least one letter or digit (it names the run "
@@ -206,19 +222,28 @@ def check_values(s: Any, plant_variants: tuple[str, ...], targets: tuple[str, ..
             number(f"trajectory.{name}", value, allowed)
         else:
             vector(f"trajectory.{name}", value, size, allowed)
+    targets_given = s.trajectory.joint_targets
+    if targets_given:
+        vector("trajectory.joint_targets", targets_given, robot.n_task_joints, JOINT_TARGET)
     vector("initial.base_position_offset", s.initial.base_position_offset, 3, POSITION_OFFSET)
     vector("initial.base_rpy_offset", s.initial.base_rpy_offset, 3, ANGLE_OFFSET)
-    vector("initial.arm_offset", s.initial.arm_offset, 7, ANGLE_OFFSET)
-    _check_actuation(s.actuation)
+    if s.initial.arm_offset:
+        vector("initial.arm_offset", s.initial.arm_offset, n, ANGLE_OFFSET)
+    _check_actuation(s.actuation, robot.thrust)
     number("rotors.speed", s.rotors.speed, ROTOR_SPEED)
     number("rotors.drive_gain", s.rotors.drive_gain, DRIVE_GAIN)
-    if s.plant_variant == "rotors" and not s.rotors.drive_gain > 0:
-        _fail("rotors.drive_gain", s.rotors.drive_gain, "> 0 (N m s/rad) for the rotors plant",
+    spinning = s.plant_variant in robot.rotor_variants
+    if spinning and not s.rotors.drive_gain > 0:
+        _fail("rotors.drive_gain", s.rotors.drive_gain,
+              f"> 0 (N m s/rad) for the '{s.plant_variant}' plant, which has rotor joints",
               DRIVE_GAIN.fix)
-    if s.plant_variant == "rigid" and s.rotors.speed != 0:
-        raise _error("rotors.speed", "rotors.speed is set but plant_variant is "
-                                 "'rigid', which has no rotor bodies: use plant_variant: "
-                                 "rotors or remove rotors.speed")
+    if not spinning and s.rotors.speed != 0:
+        raise _error("rotors.speed", f"rotors.speed is set but plant_variant "
+                                     f"'{s.plant_variant}' has no rotor joints: use a "
+                                     f"variant with rotors ({', '.join(robot.rotor_variants)})"
+                                     " or remove rotors.speed" if robot.rotor_variants else
+                     f"rotors.speed is set but plant_variant '{s.plant_variant}' has no rotor "
+                     "joints (nor does any variant of this robot): remove rotors.speed")
     if not isinstance(s.disturbances, list):
         _fail("disturbances", s.disturbances, "a list of disturbance windows")
     for i, d in enumerate(s.disturbances):
@@ -269,21 +294,22 @@ def _check_gains(g: Any, sizes: dict[str, int]) -> None:
         number(f"gains.{name}", getattr(g, name), GAIN)
 
 
-def _check_actuation(a: Any) -> None:
+def _check_actuation(a: Any, robot_thrust: tuple[float, float]) -> None:
+    """The actuation section; its thrust and torque bounds are optional overrides (.nan, the
+    default: the robot description's limits)."""
     number("actuation.lag_rise_time", a.lag_rise_time, LAG)
     flag("actuation.saturate", a.saturate)
-    thrust_min = number("actuation.thrust_min", a.thrust_min, THRUST)
-    if not a.saturate and not is_number(a.thrust_max):
-        _fail("actuation.thrust_max", a.thrust_max, "a number")
-    if a.saturate or not math.isnan(a.thrust_max):
-        if not is_number(a.thrust_max) or math.isnan(a.thrust_max):
-            _fail("actuation.thrust_max", a.thrust_max, f"set, > actuation.thrust_min "
-                  f"({thrust_min:g} N) and <= {THRUST.high:g} N", THRUST.fix)
-        if not (thrust_min < a.thrust_max <= THRUST.high):
-            _fail("actuation.thrust_max", a.thrust_max, f"set, > actuation.thrust_min "
-                  f"({thrust_min:g} N) and <= {THRUST.high:g} N", THRUST.fix)
-    if a.saturate or not (is_number(a.body_torque_max) and math.isnan(a.body_torque_max)):
-        if not is_number(a.body_torque_max) or math.isnan(a.body_torque_max):
-            _fail("actuation.body_torque_max", a.body_torque_max,
-                  f"set, {BODY_TORQUE.text()}", BODY_TORQUE.fix)
-        number("actuation.body_torque_max", a.body_torque_max, BODY_TORQUE)
+    low, high = robot_thrust
+    for name in ("thrust_min", "thrust_max", "body_torque_max"):
+        value = getattr(a, name)
+        if not is_number(value):
+            _fail(f"actuation.{name}", value, "a number, or .nan for the robot's limit")
+        if math.isnan(value):
+            continue
+        number(f"actuation.{name}", value, BODY_TORQUE if name == "body_torque_max" else THRUST)
+        if name == "thrust_min":
+            low = value
+        elif name == "thrust_max":
+            high = value
+    if not low < high:
+        _fail("actuation.thrust_max", high, f"> the thrust minimum ({low:g} N)", THRUST.fix)
