@@ -10,12 +10,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.multibody.parsing import LoadModelDirectives
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import JacobianWrtVariable
 from pydrake.systems.framework import DiagramBuilder
 
 import aerial_drake
 from aerial_drake.robots import models as dut
+from aerial_drake.robots.description import default_robot
 from aerial_drake.robots.resources import model_directory
 
 CHECKOUT = Path(__file__).resolve().parents[2]
@@ -27,9 +29,33 @@ ARM_LIMITS = np.deg2rad([170, 120, 170, 120, 170, 120, 170])
 DH_D = np.array([0.3105, 0, 0.4, 0, 0.39, 0, 0.078])
 DH_ALPHA = np.array([1, -1, -1, 1, 1, -1, 0]) * np.pi / 2
 EE_OFFSET_NOMINAL = np.array([0.3, 0.0, -0.6])  # from the system CoM, helicopter frame
+#: The plant variants of the paper's robot description.
+PLANT_VARIANTS = default_robot().variant_names()
+ARM_MOUNT_FILE = "arm_mount.dmd.yaml"
+ARM_MODEL_NAME = "lwr"
 
 
-@pytest.fixture(scope="module", params=dut.PLANT_VARIANTS)
+def arm_instance(manip):
+    """The LWR's model instance (added by arm_mount.dmd.yaml)."""
+    return manip.plant.GetModelInstanceByName(ARM_MODEL_NAME)
+
+
+def dmd_nominal_arm_posture():
+    """q_nominal [rad] as arm_mount.dmd.yaml writes it (the arm's default joint positions)."""
+    directives = LoadModelDirectives(str(model_directory() / ARM_MOUNT_FILE))
+    for directive in directives.directives:
+        model = directive.add_model
+        if model is not None and model.name == ARM_MODEL_NAME:
+            positions = model.default_joint_positions
+            return np.array([positions[f"lwr_joint_{i}"][0] for i in range(1, 8)])
+    raise AssertionError(f"{ARM_MOUNT_FILE} adds no model named '{ARM_MODEL_NAME}'.")
+
+
+def test_plant_variants_of_the_paper_robot():
+    assert PLANT_VARIANTS == ("rigid", "rotors")
+
+
+@pytest.fixture(scope="module", params=PLANT_VARIANTS)
 def manip(request):
     return dut.make_plant(request.param)
 
@@ -38,7 +64,7 @@ def helicopter_spatial_inertia(manip, context):
     """Composite spatial inertia of the helicopter's bodies about Bo, expressed in B."""
     plant = manip.plant
     return plant.CalcSpatialInertia(
-        context, manip.base_body.body_frame(), plant.GetBodyIndices(manip.helicopter)
+        context, manip.base_body.body_frame(), plant.GetBodyIndices(manip.vehicle)
     )
 
 
@@ -57,7 +83,9 @@ def test_total_and_arm_mass(manip):
     assert plant.CalcTotalMass(context) == pytest.approx(54.8, abs=1e-12)
     assert manip.total_mass() == pytest.approx(54.8, abs=1e-12)
     moving = [j.child_body().index() for j in manip.arm_joints]
-    assert plant.CalcTotalMass(context, [manip.arm]) == pytest.approx(TABLE_I_ARM_MASS, abs=1e-12)
+    assert plant.CalcTotalMass(context, [arm_instance(manip)]) == pytest.approx(
+        TABLE_I_ARM_MASS, abs=1e-12
+    )
     assert sum(plant.get_body(i).default_mass() for i in moving) == pytest.approx(
         TABLE_I_ARM_MASS, abs=1e-12
     )
@@ -81,7 +109,7 @@ def test_helicopter_composite_matches_table_i(manip):
 
 def test_every_body_is_physically_valid(manip):
     plant = manip.plant
-    for model in (manip.helicopter, manip.arm):
+    for model in (manip.vehicle, arm_instance(manip)):
         for index in plant.GetBodyIndices(model):
             body = plant.get_body(index)
             assert body.default_spatial_inertia().IsPhysicallyValid(), body.name()
@@ -114,7 +142,7 @@ def test_rotors():
     # Their angular momentum when spinning: tests/simulation/test_rotors.py.
 
 
-@pytest.mark.parametrize("variant", dut.PLANT_VARIANTS)
+@pytest.mark.parametrize("variant", PLANT_VARIANTS)
 @pytest.mark.parametrize("floating_base", dut.FLOATING_BASES)
 def test_coordinate_order(variant, floating_base):
     manip = dut.make_plant(variant, floating_base=floating_base)
@@ -178,7 +206,7 @@ def test_model_files_need_no_network():
     plant = MultibodyPlant(0.0)
     parser = dut.make_parser(plant)
     assert parser.package_map().GetPackageNames() == ["aerial_drake"]
-    for variant in dut.PLANT_VARIANTS:
+    for variant in PLANT_VARIANTS:
         assert dut.make_plant(variant).plant.is_finalized()
 
 
@@ -270,12 +298,14 @@ def test_arm_kinematics_is_standard_dh(seed):
     np.testing.assert_allclose(p_0E, X_dh.translation(), atol=1e-12)
 
 
-@pytest.mark.parametrize("variant", dut.PLANT_VARIANTS)
+@pytest.mark.parametrize("variant", PLANT_VARIANTS)
 def test_nominal_posture(variant, record_property):
     manip = dut.make_plant(variant)
     plant = manip.plant
     context = plant.CreateDefaultContext()
-    np.testing.assert_array_equal(manip.q_nominal_arm(), dut.nominal_arm_posture())
+    # The description gives no posture, so q_nominal is arm_mount.dmd.yaml's.
+    assert manip.description.nominal_posture == []
+    np.testing.assert_array_equal(manip.q_nominal_arm(), dmd_nominal_arm_posture())
     # Any base pose: the offset is expressed in the helicopter frame.
     dut.set_nominal_posture(manip, context, p_WB=(0.4, -1.0, 2.5), yaw=0.7)
     q = plant.GetPositions(context)[manip.arm_position_indices]

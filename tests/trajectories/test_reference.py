@@ -29,7 +29,7 @@ def generic_params() -> paper.TrajectoryParams:
         agile_frequency=2.3,
         orientation_amplitudes=[0.3, 0.45, 0.6],
         orientation_frequency=1.7,
-        q3_desired=0.25,
+        joint_targets=[0.25],
         heading_initial=0.4,
         heading_rate=-0.35,
         com_offset=[-0.2, 0.15, 0.5],
@@ -100,11 +100,29 @@ def test_heading_derivatives(params):
 
 @pytest.mark.parametrize("params", PARAMS)
 def test_q3d_is_constant(params):
+    # No joint_targets and no joint defaults: the paper's one joint target q3d = 0.
+    q3_desired = params.joint_targets or [0.0]
     for t in TIMES:
         sample = paper.evaluate_reference(params, t)
-        assert sample.q3d == params.q3_desired
-        assert sample.q3d_dot == 0.0
-        assert sample.q3d_ddot == 0.0
+        np.testing.assert_array_equal(sample.q_jd, q3_desired)
+        np.testing.assert_array_equal(sample.q_jd_dot, [0.0])
+        np.testing.assert_array_equal(sample.q_jd_ddot, [0.0])
+
+
+def test_joint_targets_default_to_the_given_joint_defaults():
+    params = paper.TrajectoryParams()
+    sample = paper.evaluate_reference(params, 1.3, joint_defaults=[0.1, -0.2])
+    np.testing.assert_array_equal(sample.q_jd, [0.1, -0.2])
+    np.testing.assert_array_equal(sample.q_jd_dot, [0.0, 0.0])
+    np.testing.assert_array_equal(sample.q_jd_ddot, [0.0, 0.0])
+    assert sample.to_vectors()[1].shape == (reference.task_reference_size(2),) == (30,)
+    # The pose part does not depend on the joint components.
+    paper_sample = paper.evaluate_reference(params, 1.3)
+    for name in ("com", "p_ed", "v_ed", "a_ed", "R_ed", "w_ed", "dw_ed", "b1d"):
+        np.testing.assert_array_equal(getattr(sample, name), getattr(paper_sample, name))
+    # Given joint_targets win over the defaults.
+    generic = paper.evaluate_reference(generic_params(), 1.3, joint_defaults=[0.1])
+    np.testing.assert_array_equal(generic.q_jd, [0.25])
 
 
 @pytest.mark.parametrize(
@@ -158,7 +176,7 @@ def test_paper_values_at_zero():
     )
     np.testing.assert_allclose(sample.R_ed, R_expected, atol=1e-15)
     np.testing.assert_allclose(sample.b1d[0], [1.0, 0.0, 0.0], atol=1e-15)
-    assert sample.q3d == 0.0
+    np.testing.assert_array_equal(sample.q_jd, [0.0])
 
 
 def straightforward_reference(p: paper.TrajectoryParams, t: float):
@@ -218,15 +236,16 @@ def test_sample_reference_matches_evaluate_reference():
     assert samples.com.shape == (len(TIMES), 5, 3)
     assert samples.R_ed.shape == (len(TIMES), 3, 3)
     assert samples.b1d.shape == (len(TIMES), 3, 3)
-    assert samples.q3d.shape == (len(TIMES),)
+    assert samples.q_jd.shape == (len(TIMES), 1)
     for i, t in enumerate(TIMES):
         one = paper.evaluate_reference(params, t)
         for name in ("com", "p_ed", "v_ed", "a_ed", "R_ed", "w_ed", "dw_ed", "b1d"):
             np.testing.assert_allclose(
                 getattr(samples, name)[i], getattr(one, name), rtol=0, atol=1e-14, err_msg=name
             )
-        assert samples.q3d[i] == one.q3d
-        assert samples.q3d_dot[i] == one.q3d_dot == 0.0
+        np.testing.assert_array_equal(samples.q_jd[i], one.q_jd)
+        np.testing.assert_array_equal(samples.q_jd_dot[i], one.q_jd_dot)
+        np.testing.assert_array_equal(one.q_jd_dot, [0.0])
     with pytest.raises(ValueError, match="1-D"):
         paper.sample_reference(params, np.zeros((2, 2)))
 
@@ -238,7 +257,7 @@ def test_packing_layout_and_round_trip():
     sample = paper.evaluate_reference(generic_params(), 2.5)
     com, task, heading = sample.to_vectors()
     assert com.shape == (reference.COM_REFERENCE_SIZE,) == (15,)
-    assert task.shape == (reference.TASK_REFERENCE_SIZE,) == (27,)
+    assert task.shape == (reference.task_reference_size(1),) == (27,)
     assert heading.shape == (reference.HEADING_REFERENCE_SIZE,) == (9,)
     # The documented layouts, spelled out once here.
     np.testing.assert_array_equal(com, sample.com.reshape(-1))
@@ -246,9 +265,9 @@ def test_packing_layout_and_round_trip():
         task,
         np.concatenate(
             [
-                sample.p_ed, sample.R_ed.reshape(-1), [sample.q3d],
-                sample.v_ed, sample.w_ed, [sample.q3d_dot],
-                sample.a_ed, sample.dw_ed, [sample.q3d_ddot],
+                sample.p_ed, sample.R_ed.reshape(-1), sample.q_jd,
+                sample.v_ed, sample.w_ed, sample.q_jd_dot,
+                sample.a_ed, sample.dw_ed, sample.q_jd_ddot,
             ]
         ),
     )  # fmt: skip
@@ -257,14 +276,21 @@ def test_packing_layout_and_round_trip():
     back = reference.ReferenceSample.from_vectors(com, task, heading)
     for name in ("com", "p_ed", "v_ed", "a_ed", "R_ed", "w_ed", "dw_ed", "b1d"):
         np.testing.assert_array_equal(getattr(back, name), getattr(sample, name))
-    assert (back.q3d, back.q3d_dot, back.q3d_ddot) == (sample.q3d, sample.q3d_dot, sample.q3d_ddot)
-    assert isinstance(back.q3d, float)
+    for name in ("q_jd", "q_jd_dot", "q_jd_ddot"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(sample, name))
+        assert getattr(back, name).shape == (1,)
 
     task_parts = reference.unpack_task_reference(task)
     np.testing.assert_array_equal(task_parts.R_ed, sample.R_ed)
+    # The joint pieces are views into the vector, not floats.
+    assert np.shares_memory(task_parts.q_jd, task)
+    np.testing.assert_array_equal(
+        task_parts.full_dot, np.concatenate([sample.v_ed, sample.w_ed, sample.q_jd_dot]))
+    np.testing.assert_array_equal(
+        task_parts.full_ddot, np.concatenate([sample.a_ed, sample.dw_ed, sample.q_jd_ddot]))
     np.testing.assert_array_equal(reference.unpack_com_reference(com), sample.com)
     np.testing.assert_array_equal(reference.unpack_heading_reference(heading), sample.b1d)
-    with pytest.raises(ValueError, match="27"):
+    with pytest.raises(ValueError, match=r"24 \+ 3 n_j .*got 26"):
         reference.unpack_task_reference(np.zeros(26))
 
 
@@ -273,7 +299,7 @@ def test_packing_over_time_round_trips():
     com, task, heading = samples.to_vectors()
     assert com.shape == (len(TIMES), 15) and task.shape == (len(TIMES), 27)
     back = reference.ReferenceSample.from_vectors(com, task, heading)
-    for name in ("com", "R_ed", "q3d", "dw_ed", "b1d"):
+    for name in ("com", "R_ed", "q_jd", "dw_ed", "b1d"):
         np.testing.assert_array_equal(getattr(back, name), getattr(samples, name))
 
 
@@ -366,6 +392,7 @@ def test_paper_defaults_are_valid():
         (dict(agile_amplitude=-0.1), "agile_amplitude"),
         (dict(orientation_frequency=float("inf")), "orientation_frequency"),
         (dict(heading_rate=float("nan")), "heading_rate"),
+        (dict(joint_targets=[0.1, float("inf")]), "joint_targets"),
     ],
 )
 def test_validate_names_the_field(changes, field):
