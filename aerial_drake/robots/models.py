@@ -460,7 +460,7 @@ def _check_task(plant: MultibodyPlant, robot: RobotDescription, arm: tuple[Joint
             f"{robot.source}: task: {list(robot.task)} has {parsed.size} coordinates but the "
             f"arm has {len(arm)} joints: the paper's law needs exactly as many task "
             "coordinates as joints (no redundancy). Add or remove task components "
-            "(position, orientation, position_x ..., orientation_z, joint:<name>)", "task")
+            "(position, orientation, position_x, position_y, position_z, joint:<name>)", "task")
     by_name = {j.name(): j for j in arm}
     joints = []
     for name in parsed.joint_names:

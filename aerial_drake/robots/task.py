@@ -9,9 +9,13 @@ where ``e_o = vee(skew(R_E R_ed^T))`` is the orientation error (its rate is ``w_
 zero error, :mod:`aerial_drake.control.law`). The components:
 
 - ``position``: rows 0-2 (p_E); ``position_x``, ``position_y``, ``position_z``: one of them;
-- ``orientation``: rows 3-5 (e_o); ``orientation_x``, ``orientation_y``, ``orientation_z``: one
-  of them (World axes: ``orientation_z`` is the rotation about the vertical, the end
-  effector's yaw when it is level);
+- ``orientation``: rows 3-5 (e_o), all three. Single rows of e_o are refused: with the other
+  orientation rows free, R_E R_ed^T is far from the identity and a row of vee(R_E R_ed^T)
+  no longer has the row of w_E as its rate, so (17)-(20) would feed the law the wrong
+  derivative (a run with ``orientation_z`` alone spun the wrist and lost Assumption 1 within
+  0.5 s). An Euler-angle coordinate with its analytic Jacobian would be the way to add one;
+  until then use a joint component (e.g. the wrist's angle) for the fourth coordinate of a
+  4-joint arm;
 - ``joint:NAME``: the angle of the arm joint NAME (the paper's q3 is ``joint:lwr_joint_3``).
 
 The task vector is the rows in the order listed; gains K_y, K_z are given in that order. This
@@ -30,9 +34,13 @@ POSE_COMPONENTS: dict[str, tuple[int, ...]] = {
     "position_y": (1,),
     "position_z": (2,),
     "orientation": (3, 4, 5),
-    "orientation_x": (3,),
-    "orientation_y": (4,),
-    "orientation_z": (5,),
+}
+#: Components refused, with the reason (the module docstring).
+REFUSED_COMPONENTS = {
+    name: "a single row of the orientation error is not a coordinate whose rate is the row of "
+          "w_E when the other rows are free; use orientation (all three rows) or a joint "
+          "component (joint:<name>) instead"
+    for name in ("orientation_x", "orientation_y", "orientation_z", "yaw")
 }
 JOINT_PREFIX = "joint:"
 #: Short names of y_full's pose rows, for plots and metrics.
@@ -84,6 +92,9 @@ def parse_task(components: list[str] | tuple[str, ...]) -> TaskComponents:
             rows.append(POSE_ROWS + len(joints))
             joints.append(name)
             continue
+        if component in REFUSED_COMPONENTS:
+            raise TaskError(f"task component '{component}' is not supported: "
+                            f"{REFUSED_COMPONENTS[component]}")
         if component not in POSE_COMPONENTS:
             raise TaskError(f"unknown task component '{component}'; valid: {valid_components()}")
         for row in POSE_COMPONENTS[component]:

@@ -94,7 +94,8 @@ def set_initial_state(scenario: Scenario, loop: ClosedLoop, plant_context: Conte
     R0 = RollPitchYaw(init.base_rpy_offset).ToRotationMatrix() @ X_WB.rotation()
     p0 = X_WB.translation() + np.asarray(init.base_position_offset)
     sim.plant.SetFreeBodyPose(plant_context, sim.base_body, RigidTransform(R0, p0))
-    for joint, mj, offset in zip(sim.arm_joints, model.arm_joints, init.arm_offset):
+    offsets = init.arm_offset or [0.0] * model.n
+    for joint, mj, offset in zip(sim.arm_joints, model.arm_joints, offsets):
         joint.set_angle(plant_context, q_model[mj.position_start()] + offset)
     for joint, sign in zip(sim.rotor_joints, sim.rotor_directions):
         joint.set_angular_rate(plant_context, sign * scenario.rotors.speed)

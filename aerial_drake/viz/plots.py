@@ -288,7 +288,9 @@ def _draw_limit(ax, value, color="0.35", text=None) -> None:
 
 
 #: Fig. 6's rows: the inputs drawn on each (names of :data:`INPUT_NAMES`).
-INPUT_ROWS = (("thrust",), ("mu_x", "mu_y", "mu_z")) + tuple((f"tau_{j}",) for j in range(1, 8))
+def input_rows(n: int) -> tuple[tuple[str, ...], ...]:
+    """Fig. 6's rows for a robot with ``n`` arm joints: the inputs drawn on each."""
+    return (("thrust",), ("mu_x", "mu_y", "mu_z")) + tuple((f"tau_{j}",) for j in range(1, n + 1))
 #: Fig. 6's right column: the first ZOOM_S seconds, where the start saturates some inputs.
 ZOOM_S = 0.05
 _ROW_LABELS = {"thrust": "$f$ (N)", "mu_x": "$\\mu$ (N m)"}
@@ -317,7 +319,7 @@ def figure_inputs(run: Run) -> Figure:
     t = run.t
     limits = run.input_limits()
     index = {name: k for k, name in enumerate(input_names(u.shape[1] - 4))}
-    rows = [r for r in INPUT_ROWS if all(index[n] < u.shape[1] for n in r)]
+    rows = list(input_rows(u.shape[1] - 4))
     fig = Figure(figsize=(10.0, 1.35 * len(rows) + 1.2), dpi=DPI, layout="constrained")
     FigureCanvasAgg(fig)
     axes = fig.subplots(len(rows), 2, sharex="col", squeeze=False,
