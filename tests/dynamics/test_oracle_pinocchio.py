@@ -33,7 +33,8 @@ from aerial_drake.control import compiled  # noqa: E402
 from aerial_drake.control.controller import make_controller  # noqa: E402
 from aerial_drake.dynamics.decoupling import DecoupledDynamics  # noqa: E402
 from aerial_drake.dynamics.kinematic_tree import KinematicTree  # noqa: E402
-from aerial_drake.robots.models import PLANT_VARIANTS, make_plant  # noqa: E402
+from aerial_drake.robots.description import default_robot  # noqa: E402
+from aerial_drake.robots.models import make_plant  # noqa: E402
 from aerial_drake.simulation.runner import reference_configuration  # noqa: E402
 from aerial_drake.simulation.scenarios import load_scenario  # noqa: E402
 from aerial_drake.trajectories.paper import evaluate_reference  # noqa: E402
@@ -48,6 +49,10 @@ from paper_oracles import (  # noqa: E402
 
 def rel(a, b):
     return float(np.abs(a - b).max() / max(np.abs(b).max(), 1e-300))
+
+
+#: The plant variants of the paper's robot description.
+PLANT_VARIANTS = default_robot().variant_names()
 
 
 def random_states(plant, seed, count=6):
@@ -76,7 +81,7 @@ def model(request):
 
 
 def test_every_shipped_model_is_covered():
-    # A model added to PLANT_VARIANTS is held against Pinocchio by the fixture above; this
+    # A variant added to the description is held against Pinocchio by the fixture above; this
     # names the two the oracle was written for, so a renamed variant is noticed.
     assert set(PLANT_VARIANTS) == {"rigid", "rotors"}
 
