@@ -23,10 +23,11 @@ from aerial_drake.robots.models import add_to_builder
 # --- The open loop at hover -----------------------------------------------------------------
 def linearize_open_loop(eq: HoverEquilibrium) -> LinearSystem:
     """The plant alone, linearised at ``eq`` with its hover inputs; the input is
-    ``[f, mu (3), tau (7)]`` (11), the output the full state."""
+    ``[f, mu (3), tau (n)]``, the output the full state."""
     model = eq.model
     builder = DiagramBuilder()
-    sim = add_to_builder(builder, model.variant, floating_base=model.floating_base)
+    sim = add_to_builder(builder, model.variant, floating_base=model.floating_base,
+                         robot=model.description)
     sim.plant.set_name("plant")
     inputs = builder.AddSystem(Demultiplexer([4 + len(sim.arm_joints)]))
     inputs.set_name("inputs")

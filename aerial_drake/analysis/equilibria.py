@@ -11,7 +11,12 @@ import numpy as np
 from pydrake.math import RollPitchYaw, RotationMatrix
 
 from aerial_drake.dynamics.equilibrium import UnreachablePose, solve_configuration
-from aerial_drake.robots.models import AerialManipulator, make_plant, nominal_end_effector_offset
+from aerial_drake.robots.models import (
+    AerialManipulator,
+    make_plant,
+    nominal_end_effector_offset,
+    set_nominal_posture,
+)
 from aerial_drake.trajectories.reference import ReferenceSample
 
 
@@ -130,21 +135,43 @@ def hover_equilibrium(p_WG: np.ndarray, p_WE: np.ndarray, R_WE: np.ndarray | Non
                             joint_torques=tau, horizontal_force_residual=residual)
 
 
+#: How far the "turned" hover moves the end effector from its nominal offset (heading frame,
+#: m): for the paper's robot to (0.35, 0.1, -0.55) m from the CoM.
+TURNED_MOVE = np.array([0.05, 0.1, 0.05])
+
+
+def nominal_end_effector_rotation(model: AerialManipulator) -> np.ndarray:
+    """R_BE at the nominal posture (the vehicle level): the end effector's nominal
+    orientation in the vehicle frame (the identity, to round-off, for the paper's robot)."""
+    plant = model.plant
+    ctx = plant.CreateDefaultContext()
+    set_nominal_posture(model, ctx)
+    R_WB = plant.EvalBodyPoseInWorld(ctx, model.base_body).rotation()
+    R_WE = model.end_effector_frame.CalcPoseInWorld(ctx).rotation()
+    R = R_WB.inverse().multiply(R_WE).matrix()
+    # Round-off (1e-16) of the design pose kept out of the equilibria.
+    return np.where(np.abs(R) < 1e-12, 0.0, np.where(np.abs(np.abs(R) - 1.0) < 1e-12,
+                                                     np.sign(R), R))
+
+
 def default_equilibria(model: AerialManipulator | None = None) -> dict[str, HoverEquilibrium]:
     """Two hovers used by the analysis and the tests: ``"nominal"`` (the end effector at the
-    model's nominal offset from the CoM, :func:`nominal_end_effector_offset`: 0.3 m ahead
-    and 0.6 m below, R_WE = I, the mount's design pose) and ``"turned"``
-    (heading 0.7 rad, the end effector moved and tilted, the task's joints 0.2 rad off
-    nominal)."""
+    model's nominal offset from the CoM, :func:`nominal_end_effector_offset`, and its nominal
+    orientation; for the paper's robot 0.3 m ahead and 0.6 m below, R_WE = I, the mount's
+    design pose) and ``"turned"`` (heading 0.7 rad, the end effector moved by
+    ``TURNED_MOVE`` from nominal in the heading frame and tilted, the task's joints 0.2 rad
+    off nominal)."""
     model = model if model is not None else make_plant("rigid", floating_base="rpy")
     p_WG = np.array([0.0, 0.0, 2.0])
     yaw = 0.7
     R_yaw = RotationMatrix.MakeZRotation(yaw)
     turned_R_WE = (R_yaw @ RotationMatrix(RollPitchYaw(0.3, -0.2, 0.1))).matrix()
+    nominal = nominal_end_effector_offset(model)
+    R_nominal = nominal_end_effector_rotation(model)
+    turned_R_WE = turned_R_WE @ R_nominal
     return {
-        "nominal": hover_equilibrium(p_WG, p_WG + nominal_end_effector_offset(model),
-                                     np.eye(3), model=model),
-        "turned": hover_equilibrium(p_WG, p_WG + R_yaw.matrix() @ [0.35, 0.1, -0.55],
+        "nominal": hover_equilibrium(p_WG, p_WG + nominal, R_nominal, model=model),
+        "turned": hover_equilibrium(p_WG, p_WG + R_yaw.matrix() @ (nominal + TURNED_MOVE),
                                     turned_R_WE, yaw=yaw,
                                     q_j=model.task_joint_nominal() + 0.2, model=model),
     }

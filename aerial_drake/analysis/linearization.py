@@ -56,7 +56,8 @@ def build_hover_loop(eq: HoverEquilibrium, gains: Gains) -> HoverLoop:
     """The closed loop of :class:`HoverLoop` (continuous feedback: no hold, lag, saturation)."""
     model = eq.model
     builder = DiagramBuilder()
-    sim = add_to_builder(builder, model.variant, floating_base=model.floating_base)
+    sim = add_to_builder(builder, model.variant, floating_base=model.floating_base,
+                         robot=model.description)
     sim.plant.set_name("plant")
     if sim.plant.num_positions() != model.plant.num_positions():
         raise ValueError("the equilibrium's model and the simulated plant differ in coordinates")

@@ -15,7 +15,6 @@ from pydrake.systems.analysis import SimulatorConfig
 
 from aerial_drake.analysis.settings import FULL_SETTINGS
 from aerial_drake.control.law import Gains, diagnostics_slices, task_size_of_diagnostics
-from aerial_drake.robots.models import make_plant
 from aerial_drake.simulation.scenarios import Scenario, load_scenario
 
 
@@ -162,7 +161,7 @@ def trajectory_accel_bound(scenario: Scenario, m: float, samples: int = 2001) ->
     from aerial_drake.trajectories.paper import sample_reference
     t = np.linspace(0.0, scenario.duration, samples)
     ref = sample_reference(scenario.trajectory, t)
-    gravity = make_plant("rigid").plant.gravity_field().gravity_vector()
+    gravity = scenario.controller_model().plant.gravity_field().gravity_vector()
     acc = np.asarray(ref.com)[:, 2, :] - gravity
     return float(m * np.linalg.norm(acc, axis=1).max())
 

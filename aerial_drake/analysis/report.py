@@ -25,7 +25,6 @@ from aerial_drake.analysis.lyapunov import lee_conditions, lyapunov_study, traje
 from aerial_drake.analysis.region_of_attraction import region_of_attraction
 from aerial_drake.analysis.settings import FAST_SETTINGS, FULL_SETTINGS, AnalysisSettings
 from aerial_drake.dynamics.equilibrium import UnreachablePose
-from aerial_drake.robots.models import make_plant
 from aerial_drake.simulation.outputs import strict_json, write_text_atomically
 from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
 
@@ -55,7 +54,8 @@ def analyze(out_dir: str | Path = "out/analysis", *, scenario: str = "nominal",
                             f"controller.type '{sc.controller.type}' (docs/baselines.md)")
     report: dict = {"scenario": sc.name, "equilibria": {}}
     lins = {}
-    for name, eq in default_equilibria().items():
+    model = sc.controller_model(floating_base="rpy")
+    for name, eq in default_equilibria(model).items():
         say(f"linearising the closed loop at hover '{name}'")
         lin = linearize_closed_loop(eq, sc.gains)
         lins[name] = lin
@@ -65,7 +65,7 @@ def analyze(out_dir: str | Path = "out/analysis", *, scenario: str = "nominal",
             "open_loop": {**controllability(open_loop), "unactuated_generalized_forces":
                           unactuated_directions(eq, open_loop).round(12).tolist()}}
         say(f"  max relative eigenvalue mismatch {lin.max_relative_mismatch:.2e}")
-    m = make_plant("rigid").total_mass()
+    m = model.total_mass()
     report["lee_conditions"] = lee_conditions(sc.gains, m,
                                               accel_bound=trajectory_accel_bound(sc, m))
     st = settings
@@ -168,7 +168,8 @@ def format_report(report: dict) -> str:
         eq = cl["equilibrium"]
         lines.append(f"hover '{name}': CoM {(np.round(eq['p_WG_m'], 3) + 0.0).tolist()} m, yaw "
                      f"{eq['yaw_rad']:g} rad, end effector "
-                     f"{(np.round(eq['p_WE_m'], 3) + 0.0).tolist()} m, q3 {eq['q3_rad']:g}; "
+                     f"{(np.round(eq['p_WE_m'], 3) + 0.0).tolist()} m, task joints "
+                     f"{np.round(eq['task_joints_rad'], 4).tolist()} rad; "
                      f"thrust {eq['thrust_N']:.1f} N")
         lines.append(f"  closed loop: {cl['states']} states, |x_dot| at equilibrium "
                      f"{cl['derivative_residual']:.1e}, max relative eigenvalue mismatch "

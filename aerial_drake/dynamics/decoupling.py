@@ -367,8 +367,14 @@ def _find_base(plant: MultibodyPlant) -> RigidBody:
     floating = [plant.get_body(b) for b in plant.GetFloatingBaseBodies()]
     if len(floating) == 1:
         return floating[0]
-    if plant.HasBodyNamed("helicopter"):
-        return plant.GetBodyByName("helicopter")
+    # A floating joint added explicitly (e.g. RpyFloatingJoint for linearising): the one
+    # six-velocity joint from World.
+    world = plant.world_body().index()
+    joints = [plant.get_joint(j) for j in plant.GetJointIndices()]
+    free = [j.child_body() for j in joints
+            if j.parent_body().index() == world and j.num_velocities() == 6]
+    if len(free) == 1 and not floating:
+        return free[0]
     raise ValueError("cannot tell the floating base: pass base_body= explicitly "
                      f"(floating bodies: {[b.name() for b in floating]})")
 
