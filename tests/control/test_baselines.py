@@ -22,17 +22,17 @@ from aerial_drake.simulation.scenarios import ControllerConfig, InitialCondition
 from aerial_drake.trajectories.paper import evaluate_reference
 
 KINDS = ("uncoupled", "static_compensation")
+N_TASK = 7  # the paper's task: end-effector pose and q3
 
 
 @pytest.fixture(scope="module")
 def setup():
     scenario = load_scenario("nominal")
     model = make_plant("rigid")
-    q3 = model.arm_joints[2]
     offset = body_offset_in_heading_frame(scenario, model)
     controllers = {kind: BaselineController(
-        model.plant, model.base_body, model.end_effector_frame, q3.velocity_start(),
-        q3.position_start(), scenario.gains, kind=kind, body_offset_H=offset)
+        model.plant, model.base_body, model.end_effector_frame, model.task, scenario.gains,
+        kind=kind, body_offset_H=offset)
         for kind in KINDS}
     return scenario, model, controllers
 
@@ -53,7 +53,7 @@ def test_error_diagnostics_are_the_paper_controllers(setup):
     x = _state(scenario, model, 1.3)
     refs = evaluate_reference(scenario.trajectory, 1.3).to_vectors()
     _, d_paper = paper.evaluate(x, *refs)
-    sl = diagnostics_slices()
+    sl = diagnostics_slices(model.n)
     for kind, controller in controllers.items():
         _, d = controller.evaluate(x, *refs)
         for name in ("x_tilde", "x_tilde_dot", "y_tilde", "com_error", "ee_position_error",
@@ -182,7 +182,7 @@ def _case(kind, which):
 @pytest.mark.parametrize("which", ("hover", "slow"))
 def test_baseline_alone_holds_a_hover_and_tracks_a_slow_trajectory(kind, which):
     result = run_scenario(_case(kind, which), progress=False)
-    sl = diagnostics_slices()
+    sl = diagnostics_slices(N_TASK)
     t = result.log["t"]
     ee = result.log["diagnostics"][:, sl["ee_position_error"]][:, 0]
     bound, after = (HOVER_BOUND, HOVER_AFTER) if which == "hover" else (SLOW_BOUND, SLOW_AFTER)

@@ -10,7 +10,7 @@ import pytest
 from aerial_drake.control import compiled as dut
 from aerial_drake.control.compiled.linalg import _min_eigenvalue_sym
 from aerial_drake.control.controller import make_controller
-from aerial_drake.control.law import DIAGNOSTICS_SIZE, AssumptionViolation, diagnostics_slices
+from aerial_drake.control.law import AssumptionViolation, diagnostics_size, diagnostics_slices
 from aerial_drake.dynamics.decoupling import DecoupledDynamics
 from aerial_drake.dynamics.kinematic_tree import KinematicTree, UnsupportedTree
 from aerial_drake.robots.models import make_plant
@@ -21,6 +21,8 @@ from aerial_drake.trajectories.paper import evaluate_reference
 from chain_plant import make_random_chain
 from states import at_state, random_states, rel
 
+N_TASK = 7  # the paper's task: end-effector pose and q3
+DIAGNOSTICS_SIZE = diagnostics_size(N_TASK)
 FIELDS = ("M", "C", "g", "J_g", "J_g_dot", "p_WG", "N", "N_dot", "T", "T_dot", "T_inv",
           "Lambda", "Gamma", "xi", "R")
 
@@ -70,7 +72,7 @@ def law_inputs(scenario, seed):
 def test_law_matches_reference(nominal):
     scenario, controller = nominal
     assert controller.compiled
-    slices = diagnostics_slices()
+    slices = diagnostics_slices(N_TASK)
     for x, refs in law_inputs(scenario, seed=0):
         out = controller.solve(x, *refs)
         command, diagnostics = controller.evaluate(x, *refs)

@@ -3,7 +3,16 @@
 import numpy as np
 import pytest
 
-from aerial_drake.control.law import GainMatrices, Gains, desired_attitude, unit_vector_derivatives
+from aerial_drake.control.law import (
+    GainMatrices,
+    Gains,
+    desired_attitude,
+    diagnostics_layout,
+    diagnostics_size,
+    diagnostics_slices,
+    task_size_of_diagnostics,
+    unit_vector_derivatives,
+)
 from aerial_drake.dynamics.decoupling import hat, vee
 
 
@@ -62,8 +71,20 @@ def paper_gains(**changes):
     return g
 
 
+def test_diagnostics_layout_of_the_papers_task():
+    """The paper's task (7 rows) keeps the diagnostics vector of 37 entries."""
+    assert diagnostics_size(7) == 37
+    assert task_size_of_diagnostics(37) == 7
+    sl = diagnostics_slices(7)
+    assert (sl["y_tilde"], sl["z_tilde"]) == (slice(12, 19), slice(19, 26))
+    assert sl["thrust_residual"] == slice(35, 37)
+    assert diagnostics_slices(diagnostics_layout(7)) == sl
+    with pytest.raises(ValueError, match="36"):
+        task_size_of_diagnostics(36)
+
+
 def test_gains_accept_table_ii():
-    K = GainMatrices.from_gains(paper_gains())
+    K = GainMatrices.from_gains(paper_gains(), n_task=7)
     np.testing.assert_allclose(K.Lambda2_bar_inv, 1 / np.array([1.46, 0.36, 1.46]))
 
 
@@ -76,7 +97,7 @@ def test_gains_accept_table_ii():
 ])
 def test_gains_reject_bad_values(field, value, match):
     with pytest.raises(ValueError, match=match):
-        paper_gains(**{field: value}).validate()
+        paper_gains(**{field: value}).validate(7)
 
 
 def test_vee_takes_skew_part():

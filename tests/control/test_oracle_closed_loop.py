@@ -51,6 +51,7 @@ from paper_oracles import (
 pytestmark = pytest.mark.slow
 
 ACCURACY = 1e-7  # runge_kutta3's error control
+N_TASK = 7  # the paper's task: end-effector pose and q3
 SKIP_S = 0.05  # s left out at the start (fast modes), and 4 samples at the end (differences)
 RUNS = {"nominal-compiled": ("nominal", "compiled", 0.5),
         "orbit-compiled": ("orbit", "compiled", 0.5),
@@ -111,8 +112,8 @@ def signals(scenario, log) -> SimpleNamespace:
         J_y = task_jacobian(plant, ctx, model.end_effector_frame, q3.velocity_start())
         y_t = np.concatenate([X_WE.translation() - task.p_ed,
                               vee_skew(X_WE.rotation().matrix() @ task.R_ed.T),
-                              [q[q3.position_start()] - task.q3d]])
-        y_d_dot = np.concatenate([task.v_ed, task.w_ed, [task.q3d_dot]])
+                              q[[q3.position_start()]] - task.q_jd])
+        y_d_dot = np.concatenate([task.v_ed, task.w_ed, task.q_jd_dot])
         z_t = J_y @ v - y_d_dot + K.K_y * y_t  # (17)-(18): z~ = y~_dot + K_y y~
         M = plant.CalcMassMatrix(ctx)
         J_g = plant.CalcJacobianCenterOfMassTranslationalVelocity(
@@ -234,7 +235,7 @@ def test_lyapunov_diagnostics_are_24_25(run):
 
 
 def errors_24_25(s):
-    sl = diagnostics_slices()
+    sl = diagnostics_slices(N_TASK)
     out = {}
     mine = {"V1": V1_of(s), "V_task": V_task_of(s)}
     mine["V"] = mine["V1"] + mine["V_task"]

@@ -2,6 +2,8 @@
 command and diagnostics are held in the controller's state; the runner's log still gives each
 sample's diagnostics at its own time."""
 
+import re
+
 import numpy as np
 import pytest
 from pydrake.systems.analysis import Simulator
@@ -9,13 +11,14 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
 from aerial_drake.control.controller import make_controller
-from aerial_drake.control.law import AssumptionViolation
+from aerial_drake.control.law import AssumptionViolation, diagnostics_slices
 from aerial_drake.robots.models import make_plant
 from aerial_drake.simulation.runner import SimulationFailed, reference_configuration, run_scenario
 from aerial_drake.simulation.scenarios import load_scenario
 from aerial_drake.trajectories.generator import ReferenceGenerator
 
 PERIOD = 1e-3
+N_TASK = 7  # the paper's task: end-effector pose and q3
 
 
 @pytest.fixture(scope="module")
@@ -140,10 +143,17 @@ def test_logged_command_is_the_previous_samples(short_run):
 
 def test_failed_sample_is_not_logged(tmp_path):
     """An assumption violated at a sample stops the run there; the log ends one sample before
-    (that sample's diagnostics were never computed)."""
+    (that sample's diagnostics were never computed). sigma_min(J_3) starts at 0.203 and first
+    drops below 0.2 at about 0.135 s; a start posture that violates the limit is refused
+    before simulating (tests/simulation/test_closed_loop.py)."""
+    limit = 0.2
     scenario = load_scenario("nominal", overrides={"duration": 0.2,
-                                                   "sigma_min_J3_limit": 5.0})
-    with pytest.raises(SimulationFailed, match=r"t = 0\.0+ s: Assumption 1"):
+                                                   "sigma_min_J3_limit": limit})
+    with pytest.raises(SimulationFailed, match=r"t = 0\.1\d+ s: Assumption 1") as failure:
         run_scenario(scenario, out_dir=tmp_path, progress=False)
+    t_failed = float(re.search(r"t = (\d+\.\d+) s", str(failure.value)).group(1))
     log = np.load(tmp_path / "log.npz")
-    assert len(log["t"]) == 0 and len(log["diagnostics"]) == 0
+    assert len(log["t"]) == len(log["diagnostics"]) == round(t_failed / PERIOD)
+    assert log["t"][-1] == pytest.approx(t_failed - PERIOD, abs=1e-9)
+    sigma = log["diagnostics"][:, diagnostics_slices(N_TASK)["sigma_min_J3"]]
+    assert np.all(sigma > limit)
