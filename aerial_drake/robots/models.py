@@ -424,6 +424,11 @@ def _check_structure(plant: MultibodyPlant, robot: RobotDescription, variant: st
             path.append(j)
         body = j.parent_body().index()
     path.reverse()
+    if not path:
+        raise RobotDescriptionError(
+            f"{src}: end_effector.body: '{ee.name()}' is not on the arm (no arm joint lies "
+            "between it and the vehicle): put the end-effector frame on the arm's last link",
+            "end_effector.body")
     on_path = {j.index() for j in path}
     if robot.arm_joints:
         listed = tuple(_find_joint(plant, name, robot, "arm_joints") for name in robot.arm_joints)
@@ -444,11 +449,6 @@ def _check_structure(plant: MultibodyPlant, robot: RobotDescription, variant: st
             f"{src}: arm_joints {[j.name() for j in listed]} are not the chain from the "
             f"vehicle to the end effector, {[j.name() for j in path]} (in that order); "
             "leave arm_joints empty to take the chain", "arm_joints")
-    if not path:
-        raise RobotDescriptionError(
-            f"{src}: end_effector.body: '{ee.name()}' is not on the arm (no arm joint lies "
-            "between it and the vehicle): put the end-effector frame on the arm's last link",
-            "end_effector.body")
     return _Structure(tuple(path), rotor_joints, ee)
 
 
