@@ -3,7 +3,10 @@ states and references a short run of a paper scenario visited, in microseconds: 
 alone (``CompiledLaw.__call__``, what the simulation's controller calls at each sample) and
 through ``DecoupledController.evaluate`` (which adds the output arrays and the status checks).
 
-    python benchmarks/bench_law.py [--scenario nominal] [--duration 2] [--calls 20000]
+    python benchmarks/bench_law.py [--scenarios nominal quadrotor_ur3e] [--calls 20000]
+
+One scenario per shipped robot by default, the robots alternating in rounds so their ratio
+holds while the machine's speed drifts.
 
 The machine's speed drifts: compare two versions of the law in one process, alternating
 (e.g. with this script's ``time_calls`` on both), not across runs.
@@ -48,24 +51,46 @@ def time_calls(evaluate, inputs, calls: int, block: int = 20) -> np.ndarray:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scenario", default="nominal")
+    parser.add_argument("--scenarios", nargs="+", default=["nominal", "quadrotor_ur3e"],
+                        help="one scenario per shipped robot by default")
     parser.add_argument("--duration", type=float, default=2.0)
     parser.add_argument("--calls", type=int, default=20000)
+    parser.add_argument("--rounds", type=int, default=10,
+                        help="the robots alternate in this many rounds (one sitting)")
     args = parser.parse_args()
-    controller, inputs = logged_inputs(args.scenario, args.duration)
-    law = controller._compiled
-    command, diagnostics = (np.empty_like(a) for a in controller.evaluate(*inputs[0]))
+    subjects = {}
+    for name in args.scenarios:
+        controller, inputs = logged_inputs(name, args.duration)
+        law = controller._compiled
+        command, diagnostics = (np.empty_like(a) for a in controller.evaluate(*inputs[0]))
 
-    def kernel(x, com, task, heading):
-        law(x, com, task, heading, command, diagnostics)
+        def kernel(x, com, task, heading, law=law, command=command, diagnostics=diagnostics):
+            law(x, com, task, heading, command, diagnostics)
+
+        subjects[name] = (controller, inputs, kernel)
 
     print(f"machine: {platform.machine()}, {platform.processor() or platform.platform()}, "
           f"python {platform.python_version()}")
-    for name, evaluate in (("CompiledLaw.__call__", kernel),
-                           ("DecoupledController.evaluate", controller.evaluate)):
-        times = 1e6 * time_calls(evaluate, inputs, args.calls)
-        print(f"{name}: median {np.median(times):.1f} us, 10th percentile "
-              f"{np.percentile(times, 10):.1f} us ({args.calls} calls, {args.scenario} states)")
+    per_round = max(args.calls // args.rounds, 20)
+    times: dict = {(name, kind): [] for name in subjects
+                   for kind in ("CompiledLaw.__call__", "DecoupledController.evaluate")}
+    for _ in range(args.rounds):  # interleaved: each robot in every round
+        for name, (controller, inputs, kernel) in subjects.items():
+            for kind, evaluate in (("CompiledLaw.__call__", kernel),
+                                   ("DecoupledController.evaluate", controller.evaluate)):
+                times[name, kind].append(1e6 * time_calls(evaluate, inputs, per_round))
+    for (name, kind), chunks in times.items():
+        t = np.concatenate(chunks)
+        controller = subjects[name][0]
+        print(f"{name} (n = {controller._n}): {kind}: median {np.median(t):.1f} us, "
+              f"10th-90th percentile {np.percentile(t, 10):.1f}-{np.percentile(t, 90):.1f} us "
+              f"({per_round * args.rounds} calls in {args.rounds} interleaved rounds)")
+    if len(subjects) > 1:
+        first = next(iter(subjects))
+        base = np.median(np.concatenate(times[first, "CompiledLaw.__call__"]))
+        for name in list(subjects)[1:]:
+            other = np.median(np.concatenate(times[name, "CompiledLaw.__call__"]))
+            print(f"kernel time {name} / {first}: {other / base:.3f}")
 
 
 if __name__ == "__main__":

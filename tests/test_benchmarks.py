@@ -15,6 +15,8 @@ BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
     ("bench_decomposition.py", ["--repeats", "20"], ["compiled", "ratio"]),
     ("bench_sim.py", ["--repeats", "1", "--duration", "0.05", "--scenarios", "nominal"],
      ["nominal", "peak RSS"]),
+    ("bench_law.py", ["--calls", "40", "--rounds", "2", "--duration", "0.05"],
+     ["nominal (n = 7)", "quadrotor_ur3e (n = 6)", "kernel time quadrotor_ur3e / nominal"]),
 ])
 def test_benchmark_runs(script, args, expected):
     done = subprocess.run([sys.executable, str(BENCHMARKS / script), *args],
