@@ -57,7 +57,10 @@ def sigma_min_J3(model: AerialManipulator, x: np.ndarray) -> float:
 
 def check_start_posture(scenario: Scenario, model: AerialManipulator, x0: np.ndarray) -> None:
     """Raise ScenarioError if J_3 is singular (Assumption 1) at the start state ``x0`` of the
-    controller's model."""
+    controller's model. A non-finite ``x0`` is left to the run's non-finite check, which
+    reports it at t = 0 (Drake's SetPositionsAndVelocities would abort on it here)."""
+    if not np.all(np.isfinite(x0)):
+        return
     sigma = sigma_min_J3(model, x0)
     limit = scenario.sigma_min_J3_limit
     if not sigma > limit:
