@@ -181,6 +181,10 @@ class Scenario:
 def robot_description(robot: str) -> RobotDescription:
     """The description named by a scenario's ``robot`` field (a shipped name or an absolute
     path, as :func:`load_scenario` leaves it), read once per file version."""
+    if not isinstance(robot, str) or not robot.strip():
+        raise ScenarioError(f"robot: {robot!r} is not a shipped robot's name "
+                            f"({', '.join(shipped_robots())}) or a robot description file's "
+                            "path", "robot")
     path = shipped_robots().get(robot, Path(robot))
     try:
         stamp = path.stat().st_mtime_ns
