@@ -61,7 +61,8 @@ def test_plant_feels_the_world_wrench_at_any_pose(model):
         RollPitchYaw(0.4, -0.7, 2.1), [0.3, -0.2, 1.5]))
     for joint in model.arm_joints:
         joint.set_angle(context, rng.uniform(-1.0, 1.0))
-    plant.get_actuation_input_port(model.arm).FixValue(context, np.zeros(len(model.arm_joints)))
+    arm = model.arm_actuators[0].model_instance()
+    plant.get_actuation_input_port(arm).FixValue(context, np.zeros(len(model.arm_joints)))
     wrench = np.array([1.5, -2.0, 0.7, 30.0, -12.0, 45.0])
     applier = make_applier(model)
     applier_context = applier.CreateDefaultContext()

@@ -13,11 +13,13 @@ import pytest
 from pydrake.systems.analysis import SimulatorConfig
 
 from aerial_drake.control.law import diagnostics_slices
-from aerial_drake.simulation.metrics import INPUT_NAMES
+from aerial_drake.simulation.metrics import input_names
 from aerial_drake.simulation.runner import SimulationFailed, run_scenario
 from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
 
-SL = diagnostics_slices()
+N_TASK = 7  # the paper's task: end-effector pose and q3 (seven arm joints)
+SL = diagnostics_slices(N_TASK)
+INPUT_NAMES = input_names(N_TASK)
 ERRORS = ("ee_position_error", "ee_orientation_error", "com_error", "base_attitude_error")
 # Largest error after 5 s without disturbances (m, rad). The requirement is 1 mm / 1e-3 rad;
 # the bounds sit 2-3x above what the law achieves (measured, drake 1.51.1 and 1.58.0 alike), so
@@ -64,10 +66,12 @@ def test_nominal_converges_without_disturbances(undisturbed, error):
 
 
 def test_second_trajectory_converges():
-    result = run_scenario(load_scenario("orbit", overrides={"duration": 10.0}), progress=False)
+    scenario = load_scenario("orbit", overrides={"duration": 10.0})
+    result = run_scenario(scenario, progress=False)
     for error in ERRORS:
         assert max_after(result, error, 5.0) < CONVERGED_ORBIT[error], error
-    # q3 is held at the orbit's q3_desired = 0.2 rad, not the paper's 0.
+    # q3 is held at the orbit's joint target (q3d) 0.2 rad, not the paper's 0.
+    assert scenario.trajectory.joint_targets == [0.2]
     assert abs(result.log["diagnostics"][-1, SL["y_tilde"]][6]) < 6e-7  # measured 2.09e-7
 
 
@@ -151,14 +155,27 @@ def test_metrics_file(nominal):
 
 
 def test_assumption_violation_stops_with_time_and_value(tmp_path):
-    # A threshold no state meets: the run must stop at once, naming Assumption 1, the time
-    # and the value, and still write what it logged.
-    scenario = load_scenario("nominal", overrides={"duration": 0.2, "sigma_min_J3_limit": 5.0})
-    with pytest.raises(SimulationFailed, match=r"t = 0\.0+ s: Assumption 1 violated: J_3 is "
+    # A threshold the start meets (sigma_min(J_3) = 0.203) and the state stops meeting at
+    # about 0.135 s: the run must stop there, naming Assumption 1, the time and the value,
+    # and still write what it logged.
+    scenario = load_scenario("nominal", overrides={"duration": 0.2, "sigma_min_J3_limit": 0.2})
+    with pytest.raises(SimulationFailed, match=r"t = 0\.1\d+ s: Assumption 1 violated: J_3 is "
                                                r"singular, sigma_min\(J_3\) = 0\.\d+"):
         run_scenario(scenario, out_dir=tmp_path, progress=False)
     m = json.loads((tmp_path / "metrics.json").read_text())
     assert m["completed"] is False and "Assumption 1" in m["failure"]
+    assert 0.1 < m["simulated_time_s"] < 0.2
+
+
+def test_singular_start_posture_is_rejected_before_simulating(tmp_path):
+    # A threshold no state meets: refused at the start posture, before anything is simulated
+    # or written, naming the field to change.
+    scenario = load_scenario("nominal", overrides={"duration": 0.2, "sigma_min_J3_limit": 5.0})
+    with pytest.raises(ScenarioError, match=r"initial: Assumption 1 fails at the start posture "
+                                            r"\(t = 0\): J_3 is singular, sigma_min\(J_3\) = "
+                                            r"0\.\d+ \(limit sigma_min_J3_limit = 5\)"):
+        run_scenario(scenario, out_dir=tmp_path, progress=False)
+    assert not (tmp_path / "metrics.json").exists() and not (tmp_path / "log.npz").exists()
 
 
 def test_trajectory_outside_the_workspace_is_rejected_before_simulating():

@@ -11,7 +11,7 @@ from pydrake.systems.framework import LeafSystem
 from aerial_drake.control.baselines import BaselineController
 from aerial_drake.control.controller import DecoupledController
 from aerial_drake.control.interface import check_controller_ports, error_diagnostics
-from aerial_drake.control.law import DIAGNOSTICS_SIZE, diagnostics_slices
+from aerial_drake.control.law import diagnostics_size, diagnostics_slices
 from aerial_drake.robots.models import make_plant
 from aerial_drake.simulation import controllers as dut
 from aerial_drake.simulation.diagram import build_closed_loop
@@ -38,7 +38,8 @@ class HoldController(LeafSystem):
         self.DeclareVectorInputPort("task_reference", 27)
         self.DeclareVectorInputPort("heading_reference", 9)
         self.DeclareVectorOutputPort("command", 4 + self._n, self._command)
-        self.DeclareVectorOutputPort("diagnostics", DIAGNOSTICS_SIZE, self._diagnostics)
+        self.DeclareVectorOutputPort("diagnostics", diagnostics_size(self._n),
+                                     self._diagnostics)
 
     def _set(self, context):
         self._plant.SetPositionsAndVelocities(self._ctx, self.get_input_port(0).Eval(context))
@@ -55,13 +56,15 @@ class HoldController(LeafSystem):
         R_b = plant.EvalBodyPoseInWorld(ctx, self._model.base_body).rotation().matrix()
         X_WE = self._model.end_effector_frame.CalcPoseInWorld(ctx)
         t = unpack_task_reference(self.get_input_port(2).Eval(context))
-        q3 = plant.GetPositions(ctx)[self._model.arm_joints[2].position_start()]
+        task = self._model.task
+        q_j = plant.GetPositions(ctx)[list(task.joint_positions)]
         output.SetFromVector(error_diagnostics(
+            task=task,
             x_g=plant.CalcCenterOfMassPositionInWorld(ctx),
             x_g_dot=plant.CalcCenterOfMassTranslationalVelocityInWorld(ctx),
             com_reference=unpack_com_reference(self.get_input_port(1).Eval(context)),
-            p_WE=X_WE.translation(), R_WE=X_WE.rotation().matrix(), q3=q3, p_ed=t.p_ed,
-            R_ed=t.R_ed, q3d=t.q3d, R_b=R_b, R_d=R_b, sigma_min_J3=1.0, f_d_norm=500.0))
+            p_WE=X_WE.translation(), R_WE=X_WE.rotation().matrix(), q_j=q_j, p_ed=t.p_ed,
+            R_ed=t.R_ed, q_jd=t.q_jd, R_b=R_b, R_d=R_b, sigma_min_J3=1.0, f_d_norm=500.0))
 
 
 def hold_factory(scenario, model):
@@ -87,11 +90,11 @@ def test_a_scenario_chooses_a_baseline(tmp_path, kind):
 
 
 def _required(base):
-    """The YAML of the fields a scenario must set (gains, limits), from ``base``."""
-    g, a = base.gains, base.actuation
+    """The YAML of the fields a scenario must set (the gains), from ``base``; the input
+    limits are the robot description's."""
+    g = base.gains
     return (f"gains:\n  K_x: {g.K_x}\n  D_x: {g.D_x}\n  k_R: {g.k_R}\n  k_w: {g.k_w}\n"
-            f"  Lambda2_bar: {g.Lambda2_bar}\n  K_y: {g.K_y}\n  K_z: {g.K_z}\n"
-            f"actuation:\n  thrust_max: {a.thrust_max}\n  body_torque_max: {a.body_torque_max}\n")
+            f"  Lambda2_bar: {g.Lambda2_bar}\n  K_y: {g.K_y}\n  K_z: {g.K_z}\n")
 
 
 @pytest.mark.parametrize("section, match", [
@@ -121,7 +124,7 @@ def test_a_controller_without_the_interfaces_ports_is_refused():
             self.DeclareVectorOutputPort("command", 11, lambda c, o: o.SetZero())
 
     with pytest.raises(ValueError, match="no output port 'diagnostics'"):
-        check_controller_ports(NoDiagnostics(), model.plant.num_multibody_states(), 7)
+        check_controller_ports(NoDiagnostics(), model.plant.num_multibody_states(), 7, 1)
     with pytest.raises(ValueError, match="no output port 'diagnostics'"):
         build_closed_loop(load_scenario("nominal"),
                           controller_factory=lambda s, m: NoDiagnostics())
@@ -148,7 +151,7 @@ def test_a_user_defined_controller_runs_through_the_scenario_machinery(tmp_path)
     # recomputed here from the logged plant state.
     model = make_plant("rigid")
     ctx = model.plant.CreateDefaultContext()
-    sl = diagnostics_slices()
+    sl = diagnostics_slices(model.n)
     errors = []
     for x, task in zip(result.log["plant_state"][::50], result.log["task_reference"][::50]):
         model.plant.SetPositionsAndVelocities(ctx, x)

@@ -1,5 +1,5 @@
 """aerial_drake.simulation.metrics on synthetic logs with hand-computed answers, and the
-workspace check (aerial_drake.simulation.runner.check_workspace) on both sides of its radius
+workspace check (aerial_drake.simulation.feasibility.check_workspace) on both sides of its radius
 (issue 22, item 3).
 
 Every expected number below is computed by hand in the comment beside it, not by the code under
@@ -15,14 +15,22 @@ import math
 import numpy as np
 import pytest
 
-from aerial_drake.control.law import DIAGNOSTICS_SIZE, diagnostics_slices
+from aerial_drake.control.law import diagnostics_size, diagnostics_slices
 from aerial_drake.robots.models import make_plant, nominal_end_effector_offset
 from aerial_drake.simulation import metrics as dut
-from aerial_drake.simulation.runner import check_workspace
+from aerial_drake.simulation.feasibility import check_workspace
 from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
 
-SL = diagnostics_slices()
+N_TASK = 7  # the paper's task: end-effector pose and q3 (seven arm joints)
+SL = diagnostics_slices(N_TASK)
+DIAGNOSTICS_SIZE = diagnostics_size(N_TASK)
+INPUT_NAMES = dut.input_names(N_TASK)
 DT = 0.1
+
+
+def test_input_names_of_the_papers_robot():
+    assert INPUT_NAMES == ("thrust", "mu_x", "mu_y", "mu_z", "tau_1", "tau_2", "tau_3",
+                           "tau_4", "tau_5", "tau_6", "tau_7")
 
 
 # --- phase_edges ------------------------------------------------------------------------------
@@ -106,7 +114,7 @@ def test_saturated_time(synthetic):
     p1, p2 = m["phases"]
     after = m[dut.saturated_after_key()]
     assert dut.saturated_after_key() == "saturated_s_after_0.5s"
-    zero = {name: 0.0 for name in dut.INPUT_NAMES}
+    zero = {name: 0.0 for name in INPUT_NAMES}
     # thrust: 3 samples (0.3 s) in phase 1, 1 (0.1 s) in phase 2; after 0.5 s only t = 1.5.
     # mu_x: t = 0.6, 0.7 (0.2 s), both after the grace. tau_1: t = 1.2 only. tau_7: t = 1.4.
     assert p1["saturated_s"] == pytest.approx({**zero, "thrust": 0.3, "mu_x": 0.2})
@@ -208,18 +216,22 @@ def test_limits_by_input():
     upper = np.concatenate([[980.6], np.full(10, 200.0)])
     out = dut.limits_by_input(lower, upper)
     assert out["thrust"] == [0.0, 980.6] and out["tau_7"] == [None, 200.0]
-    assert list(out) == list(dut.INPUT_NAMES)
+    assert list(out) == list(INPUT_NAMES)
 
 
 # --- The workspace check ----------------------------------------------------------------------
-#: The documented radius (runner.WORKSPACE_RADIUS, docs/models.md): 0.2 m about the nominal
-#: end-effector offset from the CoM, in the heading frame.
+#: The documented radius (the robot description's workspace_radius, docs/models.md): 0.2 m
+#: about the nominal end-effector offset from the CoM, in the heading frame.
 RADIUS = 0.2
 
 
 @pytest.fixture(scope="module")
 def model():
     return make_plant("rigid")
+
+
+def test_workspace_radius_is_the_descriptions(model):
+    assert model.description.workspace_radius == RADIUS
 
 
 def workspace_scenario(model, deviation, heading, agile=0.0, heading_rate=0.0):

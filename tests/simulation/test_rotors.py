@@ -12,13 +12,23 @@ from pydrake.systems.framework import DiagramBuilder
 from pydrake.systems.primitives import ConstantVectorSource
 
 from aerial_drake.robots import models
-from aerial_drake.robots.models import ROTOR_DIRECTIONS
 from aerial_drake.simulation.actuators import lag_time_constant
 from aerial_drake.simulation.diagram import _add_rotor_drive, build_closed_loop
 from aerial_drake.simulation.runner import run_scenario
 from aerial_drake.simulation.scenarios import load_scenario
 
+#: Spin directions of the rotors (left, right): the "rotors" variant's in the description.
+ROTOR_DIRECTIONS = models.make_plant("rotors").rotor_directions
 ROTOR_SPEEDS = 26.0 * np.pi * np.array(ROTOR_DIRECTIONS)  # Table I: +-26 pi rad/s
+
+
+def arm_instance(manip):
+    """The LWR's model instance (the arm's actuators are all of it)."""
+    return manip.plant.GetModelInstanceByName("lwr")
+
+
+def test_rotors_counter_rotate():
+    assert ROTOR_DIRECTIONS == (1.0, -1.0)
 
 SPEED = 26.0 * math.pi  # Table I
 TILT = math.radians(12.5)  # docs/models.md
@@ -56,7 +66,7 @@ def test_rotors_at_rest_change_nothing_the_controller_sees(seed):
     for j_rigid, j_rotors in zip(rigid.arm_joints, rotors.arm_joints):
         j_rigid.set_angle(c_rigid, j_rotors.get_angle(c_rotors))
 
-    heli_bodies = rotors.plant.GetBodyIndices(rotors.helicopter)
+    heli_bodies = rotors.plant.GetBodyIndices(rotors.vehicle)
     assert len(heli_bodies) == 3  # fuselage and two rotors
     M_rotors = rotors.plant.CalcSpatialInertia(c_rotors, rotors.base_body.body_frame(),
                                                heli_bodies)
@@ -93,7 +103,7 @@ def test_spinning_rotors_angular_momentum_is_documented_value(seed):
     plant.SetVelocities(context, v)
     R_BW = X_WB.rotation().inverse()
     for point in (X_WB.translation(), rng.uniform(-3, 3, 3)):
-        h = plant.CalcSpatialMomentumInWorldAboutPoint(context, [manip.helicopter], point)
+        h = plant.CalcSpatialMomentumInWorldAboutPoint(context, [manip.vehicle], point)
         np.testing.assert_allclose(R_BW @ h.rotational(), [0.0, NET_MOMENTUM, 0.0], atol=1e-12)
         np.testing.assert_allclose(h.translational(), np.zeros(3), atol=1e-12)
     h = plant.CalcSpatialMomentumInWorldAboutPoint(
@@ -127,8 +137,8 @@ def test_angular_momentum_conserved_with_rotors_spinning_and_body_tumbling():
     v[manip.rotor_velocity_indices] = ROTOR_SPEEDS
     v[manip.arm_velocity_indices] = rng.uniform(-0.5, 0.5, 7)
     plant.SetVelocities(context, v)
-    for port in (plant.get_actuation_input_port(manip.helicopter),
-                 plant.get_actuation_input_port(manip.arm)):
+    for port in (plant.get_actuation_input_port(manip.vehicle),
+                 plant.get_actuation_input_port(arm_instance(manip))):
         port.FixValue(context, np.zeros(port.size()))
 
     def momentum(ctx):
@@ -165,7 +175,7 @@ def test_rotor_drive_spins_the_rotors_up_to_speed():
     plant.mutable_gravity_field().set_gravity_vector(np.zeros(3))
     _add_rotor_drive(builder, manip, scenario)
     arm = builder.AddSystem(ConstantVectorSource(np.zeros(7)))
-    builder.Connect(arm.get_output_port(), plant.get_actuation_input_port(manip.arm))
+    builder.Connect(arm.get_output_port(), plant.get_actuation_input_port(arm_instance(manip)))
     diagram = builder.Build()
     simulator = Simulator(diagram)
     context = simulator.get_mutable_context()

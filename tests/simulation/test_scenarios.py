@@ -1,8 +1,12 @@
 """Scenario files: loading, and clear errors that name the field before anything runs."""
 
+import math
+
+import numpy as np
 import pytest
 
 from aerial_drake.control.law import AssumptionViolation
+from aerial_drake.simulation.diagram import input_limits
 from aerial_drake.simulation.scenarios import ScenarioError, load_scenario, shipped_scenarios
 
 
@@ -21,7 +25,15 @@ def test_shipped_scenarios_load_and_hold_table_ii():
     assert s.gains.K_y == [30.0] * 3 + [10.0] * 3 + [7.0]
     assert s.gains.K_z == [30.0] * 7
     assert s.duration == 15.0 and s.controller_period == 1e-3
-    assert (s.actuation.thrust_max, s.actuation.body_torque_max) == (980.6, 200.0)
+    # Table I's input limits: the robot description's (the scenario overrides none of them).
+    assert all(math.isnan(x) for x in (s.actuation.thrust_min, s.actuation.thrust_max,
+                                       s.actuation.body_torque_max))
+    model = s.controller_model()
+    assert model.thrust_limits() == (0.0, 980.6)
+    np.testing.assert_array_equal(model.body_torque_limits(), [200.0] * 3)
+    lower, upper = input_limits(s, model)
+    np.testing.assert_array_equal(lower[:4], [0.0, -200.0, -200.0, -200.0])
+    np.testing.assert_array_equal(upper[:4], [980.6, 200.0, 200.0, 200.0])
 
 
 def test_unknown_name_lists_the_shipped_ones():
@@ -97,15 +109,36 @@ def test_assumption_2_vanishing_thrust():
         ctrl.solve(np.concatenate([q, np.zeros(13)]), com, task, heading)
 
 
-def test_actuation_limits_have_no_silent_default(tmp_path):
-    text = shipped_scenarios()["nominal"].read_text().replace("  thrust_max: 980.6\n", "")
-    with pytest.raises(ScenarioError, match=r"actuation\.thrust_max must be set"):
-        load_scenario(write(tmp_path, text))
+def _with_actuation(lines):
+    text = shipped_scenarios()["nominal"].read_text()
+    assert text.count("  saturate: true\n") == 1
+    return text.replace("  saturate: true\n", "  saturate: true\n" + lines)
+
+
+def test_actuation_limits_override_the_robots(tmp_path):
+    s = load_scenario(write(tmp_path, _with_actuation(
+        "  thrust_max: 900.0\n  body_torque_max: 150.0\n")))
+    lower, upper = input_limits(s, s.controller_model())
+    np.testing.assert_array_equal(lower[:4], [0.0, -150.0, -150.0, -150.0])
+    np.testing.assert_array_equal(upper[:4], [900.0, 150.0, 150.0, 150.0])
+
+
+@pytest.mark.parametrize("lines,match", [
+    # Above the robot's maximum (980.6 N): no silent fallback to either limit.
+    ("  thrust_min: 990.0\n", r"actuation\.thrust_max .*> the thrust minimum \(990 N\)"),
+    ("  thrust_max: -1.0\n", r"actuation\.thrust_max"),
+    ("  body_torque_max: 0.0\n", r"actuation\.body_torque_max"),
+])
+def test_bad_actuation_overrides_are_named(tmp_path, lines, match):
+    with pytest.raises(ScenarioError, match=match):
+        load_scenario(write(tmp_path, _with_actuation(lines)))
 
 
 def test_rotor_speed_on_the_rigid_plant_is_an_error(tmp_path):
     text = shipped_scenarios()["nominal"].read_text() + "rotors:\n  speed: 81.0\n"
-    with pytest.raises(ScenarioError, match="rotors.speed is set but plant_variant is 'rigid'"):
+    with pytest.raises(ScenarioError, match=r"rotors\.speed is set but plant_variant 'rigid' "
+                                          r"has no rotor joints: use a variant with rotors "
+                                          r"\(rotors\)"):
         load_scenario(write(tmp_path, text))
 
 
@@ -139,3 +172,20 @@ def test_cli_ctrl_c_before_the_simulation_exits_130(tmp_path, capsys, monkeypatc
     monkeypatch.setattr(scenarios, "load_scenario", interrupted)
     assert cli.main(["run", "nominal", "--out", str(tmp_path), "--quiet"]) == 130
     assert "interrupted (Ctrl-C) outside the simulation" in capsys.readouterr().err
+
+
+def test_old_q3_desired_is_read_as_the_joint_target(tmp_path):
+    text = shipped_scenarios()["nominal"].read_text()
+    assert text.count("  joint_targets: [0.0]\n") == 1
+    s = load_scenario(write(tmp_path, text.replace("  joint_targets: [0.0]\n",
+                                                   "  q3_desired: 0.2\n")))
+    assert s.trajectory.joint_targets == [0.2]
+    both = text.replace("  joint_targets: [0.0]\n", "  joint_targets: [0.0]\n  q3_desired: 0.2\n")
+    with pytest.raises(ScenarioError, match="q3_desired and joint_targets are both set"):
+        load_scenario(write(tmp_path, both))
+
+
+@pytest.mark.parametrize("robot", ["no_such_robot", ""])
+def test_unknown_robot_is_named(robot):
+    with pytest.raises(ScenarioError, match="robot"):
+        load_scenario("nominal", overrides={"robot": robot})
