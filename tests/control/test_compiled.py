@@ -13,6 +13,7 @@ from aerial_drake.control.controller import make_controller
 from aerial_drake.control.law import AssumptionViolation, diagnostics_size, diagnostics_slices
 from aerial_drake.dynamics.decoupling import DecoupledDynamics
 from aerial_drake.dynamics.kinematic_tree import KinematicTree, UnsupportedTree
+from aerial_drake.robots.description import load_robot_description, shipped_robots
 from aerial_drake.robots.models import make_plant
 from aerial_drake.simulation.diagram import build_closed_loop
 from aerial_drake.simulation.runner import reference_configuration
@@ -27,13 +28,15 @@ FIELDS = ("M", "C", "g", "J_g", "J_g_dot", "p_WG", "N", "N_dot", "T", "T_dot", "
           "Lambda", "Gamma", "xi", "R")
 
 
-@pytest.mark.parametrize("which", ["model", "rotors", "chain"])
+@pytest.mark.parametrize("which", ["model", "rotors", "quadrotor_ur3e", "chain"])
 def test_decomposition_matches_reference(which):
     """Every quantity, per body Jacobians and their derivatives included, to ~1e-14: on our
-    model, on the rotors variant (a tree: rotors and arm both hang from the base) and on a
-    random chain (arbitrary joint axes and offsets)."""
+    model, on the rotors variant (a tree: rotors and arm both hang from the base), on the
+    second shipped robot and on a random chain (arbitrary joint axes and offsets)."""
     plant = {"model": lambda: make_plant("rigid").plant,
              "rotors": lambda: make_plant("rotors").plant,
+             "quadrotor_ur3e": lambda: make_plant(
+                 robot=load_robot_description("quadrotor_ur3e")).plant,
              "chain": lambda: make_random_chain(5)}[which]()
     dd = DecoupledDynamics(plant)
     tree = KinematicTree.from_plant(plant, dd.base_body)
@@ -58,21 +61,37 @@ def nominal():
 
 def law_inputs(scenario, seed):
     """States near the reference (its configuration moved by up to 5 cm / 0.1 rad, moving at
-    up to 1 m/s or rad/s) with the reference at random times of the paper's trajectory."""
+    up to 1 m/s or rad/s) with the reference at random times of the scenario's trajectory."""
     rng = np.random.default_rng(seed)
-    model = make_plant("rigid")
-    for t in rng.uniform(0.0, 15.0, 8):
+    model = scenario.controller_model()
+    for t in rng.uniform(0.0, scenario.duration, 8):
         q = reference_configuration(scenario, model, t)
         q[4:7] += rng.uniform(-0.05, 0.05, 3)
         q[7:] += rng.uniform(-0.1, 0.1, q.size - 7)
         v = rng.uniform(-1.0, 1.0, model.plant.num_velocities())
-        yield np.concatenate([q, v]), evaluate_reference(scenario.trajectory, t).to_vectors()
+        refs = evaluate_reference(scenario.trajectory, t, model.task_joint_nominal())
+        yield np.concatenate([q, v]), refs.to_vectors()
 
 
-def test_law_matches_reference(nominal):
-    scenario, controller = nominal
+#: One scenario per shipped robot.
+ROBOT_CASES = ["nominal", "quadrotor_ur3e"]
+
+
+def test_the_law_cases_cover_every_shipped_robot():
+    assert {load_scenario(name).robot for name in ROBOT_CASES} == set(shipped_robots())
+
+
+@pytest.fixture(scope="module", params=ROBOT_CASES)
+def robot_case(request):
+    """The controller of one scenario per shipped robot."""
+    scenario = load_scenario(request.param)
+    return scenario, build_closed_loop(scenario).controller
+
+
+def test_law_matches_reference(robot_case):
+    scenario, controller = robot_case
     assert controller.compiled
-    slices = diagnostics_slices(N_TASK)
+    slices = diagnostics_slices(scenario.controller_model().n)
     for x, refs in law_inputs(scenario, seed=0):
         out = controller.solve(x, *refs)
         command, diagnostics = controller.evaluate(x, *refs)

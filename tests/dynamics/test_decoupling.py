@@ -1,18 +1,23 @@
-"""Section II identities on our model (and on a random chain), at many random states."""
+"""Section II identities on every shipped robot (and on a random chain), at many random
+states."""
 
 import numpy as np
 import pytest
 from pydrake.multibody.tree import JacobianWrtVariable
 
 from aerial_drake.dynamics.decoupling import DecoupledDynamics, decompose, hat, vee
+from aerial_drake.robots.description import load_robot_description, shipped_robots
 from aerial_drake.robots.models import make_plant
 from chain_plant import make_random_chain
 from states import at_state, random_states, rel
 
 
-@pytest.fixture(scope="module", params=["model", "chain"])
+@pytest.fixture(scope="module", params=[*sorted(shipped_robots()), "chain"])
 def dut(request):
-    plant = make_plant("rigid").plant if request.param == "model" else make_random_chain(3)
+    if request.param == "chain":
+        plant = make_random_chain(3)
+    else:
+        plant = make_plant(robot=load_robot_description(request.param)).plant
     return plant, DecoupledDynamics(plant)
 
 

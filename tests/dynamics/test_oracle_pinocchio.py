@@ -33,7 +33,11 @@ from aerial_drake.control import compiled  # noqa: E402
 from aerial_drake.control.controller import make_controller  # noqa: E402
 from aerial_drake.dynamics.decoupling import DecoupledDynamics  # noqa: E402
 from aerial_drake.dynamics.kinematic_tree import KinematicTree  # noqa: E402
-from aerial_drake.robots.description import default_robot  # noqa: E402
+from aerial_drake.robots.description import (  # noqa: E402
+    default_robot,
+    load_robot_description,
+    shipped_robots,
+)
 from aerial_drake.robots.models import make_plant  # noqa: E402
 from aerial_drake.simulation.runner import reference_configuration  # noqa: E402
 from aerial_drake.simulation.scenarios import load_scenario  # noqa: E402
@@ -53,6 +57,9 @@ def rel(a, b):
 
 #: The plant variants of the paper's robot description.
 PLANT_VARIANTS = default_robot().variant_names()
+#: Every plant of every shipped robot: (robot, variant).
+SHIPPED_PLANTS = [(name, variant) for name in sorted(shipped_robots())
+                  for variant in load_robot_description(name).variant_names()]
 
 
 def random_states(plant, seed, count=6):
@@ -71,9 +78,10 @@ def random_states(plant, seed, count=6):
         yield q, rng.uniform(-scale, scale, plant.num_velocities())
 
 
-@pytest.fixture(scope="module", params=PLANT_VARIANTS)
+@pytest.fixture(scope="module", params=SHIPPED_PLANTS, ids="-".join)
 def model(request):
-    m = make_plant(request.param)
+    robot, variant = request.param
+    m = make_plant(variant, robot=load_robot_description(robot))
     pm = PinocchioModel(m.plant, m.base_body)
     ee = pm.add_frame("end_effector", m.end_effector_body,
                       m.end_effector_frame.GetFixedPoseInBodyFrame())
@@ -81,9 +89,11 @@ def model(request):
 
 
 def test_every_shipped_model_is_covered():
-    # A variant added to the description is held against Pinocchio by the fixture above; this
-    # names the two the oracle was written for, so a renamed variant is noticed.
+    # A robot or variant added is held against Pinocchio by the fixture above; this names
+    # the ones the oracle was written for, so a renamed one is noticed.
     assert set(PLANT_VARIANTS) == {"rigid", "rotors"}
+    assert set(SHIPPED_PLANTS) == {("helicopter_lwr", "rigid"), ("helicopter_lwr", "rotors"),
+                                   ("quadrotor_ur3e", "rigid")}
 
 
 def test_section_ii_quantities_match_pinocchio(model):
@@ -130,7 +140,8 @@ def test_christoffel_from_mass_matrix_matches_pinocchio(model):
     relative (the differences' truncation and round-off); tolerance 1e-9. A form that only
     reproduces C v (e.g. 1/2 d(Cv)/dv) is off by O(1) (math.md, section 3)."""
     m, pm, _ = model
-    oracle = ChristoffelFromMassMatrix(make_plant(m.variant, floating_base="rpy").plant)
+    oracle = ChristoffelFromMassMatrix(
+        make_plant(m.variant, floating_base="rpy", robot=m.description).plant)
     for q, v in random_states(m.plant, seed=5, count=3):
         q[1:4] *= 0.3  # keep the pitch away from roll-pitch-yaw's singularity at +-90 deg
         q[:4] /= np.linalg.norm(q[:4])
