@@ -13,6 +13,7 @@ from pydrake.autodiffutils import AutoDiffXd, ExtractGradient, ExtractValue, Ini
 from aerial_drake import analysis as dut
 from aerial_drake.control.controller import DecoupledController_, make_controller
 from aerial_drake.dynamics.equilibrium import UnreachablePose
+from aerial_drake.robots.description import shipped_robots
 from aerial_drake.robots.models import make_plant
 from aerial_drake.simulation.scenarios import load_scenario
 from aerial_drake.trajectories.paper import TrajectoryParams, evaluate_reference
@@ -23,14 +24,31 @@ def gains():
     return load_scenario("nominal").gains
 
 
-@pytest.fixture(scope="module")
-def equilibria():
-    return dut.default_equilibria()
+#: One scenario per shipped robot: the equilibria, linearisations and the open loop are
+#: checked on each.
+ROBOT_CASES = ["nominal", "quadrotor_ur3e"]
+
+
+def test_the_cases_cover_every_shipped_robot():
+    assert {load_scenario(name).robot for name in ROBOT_CASES} == set(shipped_robots())
+
+
+@pytest.fixture(scope="module", params=ROBOT_CASES)
+def robot_case(request):
+    """(scenario, its robot's rigid model with an rpy base)."""
+    scenario = load_scenario(request.param)
+    return scenario, scenario.controller_model(floating_base="rpy")
 
 
 @pytest.fixture(scope="module")
-def linearizations(equilibria, gains):
-    return {name: dut.linearize_closed_loop(eq, gains) for name, eq in equilibria.items()}
+def equilibria(robot_case):
+    return dut.default_equilibria(robot_case[1])
+
+
+@pytest.fixture(scope="module")
+def linearizations(equilibria, robot_case):
+    return {name: dut.linearize_closed_loop(eq, robot_case[0].gains)
+            for name, eq in equilibria.items()}
 
 
 def test_equilibria_differ(equilibria):
@@ -67,9 +85,10 @@ def test_unreachable_hover_names_the_constraint():
 @pytest.mark.parametrize("name", ["nominal", "turned"])
 def test_closed_loop_eigenvalues_match_design_note_6(linearizations, name):
     lin = linearizations[name]
-    assert lin.A.shape == (26, 26)  # 2 (6 + 7): rpy base, no quaternion norm direction
+    n = lin.equilibrium.model.n
+    assert lin.A.shape == (2 * (6 + n),) * 2  # rpy base, no quaternion norm direction
     assert {r["group"] for r in lin.table} == {"com", "attitude", "task_y", "task_z"}
-    assert len(lin.table) == 26
+    assert len(lin.table) == 2 * (6 + n)
     assert lin.max_relative_mismatch < 1e-6
     assert np.all(lin.eigenvalues.real < 0)
 
@@ -90,13 +109,14 @@ def test_open_loop_is_stabilizable(equilibria, name):
     assert report["IsStabilizable"]
     assert report["IsControllable_time_scaled"]
     assert report["pbh_max_rank_deficiency"] == 0
-    # Underactuation: 11 inputs for 13 velocities; the missing directions are reached through
-    # the attitude (two more integrations).
-    assert report["rank_B"] == 11
-    assert report["controllability_rank_growth"] == [11, 22, 24, 26]
+    # Underactuation: 4 + n inputs for 6 + n velocities (the paper's: 11 for 13); the missing
+    # directions are reached through the attitude (two more integrations).
+    n = eq.model.n
+    assert report["rank_B"] == 4 + n
+    assert report["controllability_rank_growth"] == [4 + n, 8 + 2 * n, 10 + 2 * n, 12 + 2 * n]
     # The forces the inputs cannot produce: horizontal forces on the base (World x, y).
     missing = dut.unactuated_directions(eq, system)
-    assert missing.shape == (2, 13)
+    assert missing.shape == (2, 6 + n)
     np.testing.assert_allclose(missing[:, 3:5] @ missing[:, 3:5].T, np.eye(2), atol=1e-9)
 
 
