@@ -118,3 +118,43 @@ def test_the_command_line_exits_2_on_a_bad_robot(tmp_path):
     assert proc.returncode == 2, proc.stderr
     assert "joint 'j3' is a prismatic joint" in proc.stderr
     assert not (tmp_path / "out").exists()
+
+
+def _edit(description, old, new):
+    text = description.read_text()
+    assert old in text
+    description.write_text(text.replace(old, new))
+
+
+def test_model_files_through_a_package_map(tmp_path):
+    description, _ = write_robot(tmp_path / "robot")
+    _edit(description, "models: [quad_arm.urdf]",
+          "models: ['package://mine/quad_arm.urdf']\npackage_map: {mine: .}")
+    model = make_plant(robot=load_robot_description(description))
+    assert model.n == 4
+    _edit(description, "package_map: {mine: .}", "package_map: {other: .}")
+    with pytest.raises(RobotDescriptionError, match="names the package 'mine'"):
+        make_plant(robot=load_robot_description(description))
+
+
+def test_reflected_inertia_and_effort_limits_of_the_description(tmp_path):
+    description, _ = write_robot(tmp_path)
+    plain = make_plant(robot=load_robot_description(description))
+    _edit(description, "workspace_radius: 0.1",
+          "workspace_radius: 0.1\nreflected_inertia: [0.5, 0.0, 0.0, 0.0]\n"
+          "limits: {thrust: [0.0, 150.0], body_torque: [30.0, 30.0, 15.0], "
+          "joint_effort: [1.0, 2.0, 3.0, 4.0]}")
+    _edit(description, "limits: {thrust: [0.0, 150.0], body_torque: [30.0, 30.0, 15.0]}\n", "")
+    driven = make_plant(robot=load_robot_description(description))
+    M = [m.plant.CalcMassMatrix(m.plant.CreateDefaultContext()) for m in (plain, driven)]
+    i = driven.arm_velocity_indices[0]
+    assert M[1][i, i] - M[0][i, i] == pytest.approx(0.5)
+    np.testing.assert_array_equal(driven.arm_effort_limits(), [1.0, 2.0, 3.0, 4.0])
+    np.testing.assert_array_equal(plain.arm_effort_limits(), [50.0] * 4)  # the URDF's
+
+
+def test_arm_joints_out_of_chain_order_are_refused(tmp_path):
+    description, _ = write_robot(tmp_path)
+    _edit(description, "vehicle_body: quad", "vehicle_body: quad\narm_joints: [j2, j1, j3, j4]")
+    with pytest.raises(RobotDescriptionError, match="are not the chain from the vehicle"):
+        make_plant(robot=load_robot_description(description))
