@@ -243,6 +243,8 @@ def _check_models_load_from(site, tmp_path):
         "print(model_directory())\n"
         "print(make_plant('rigid').total_mass(), make_plant('rotors').total_mass())\n"
         "print(','.join(shipped_scenarios()))\n"
+        "from aerial_drake.robots.description import shipped_robots\n"
+        "print(','.join(shipped_robots()))\n"
     )
     out = subprocess.run(
         [sys.executable, "-c", script], check=True, capture_output=True, text=True,
@@ -251,7 +253,9 @@ def _check_models_load_from(site, tmp_path):
     assert Path(out[0]).resolve() == installed.resolve()
     assert [float(m) for m in out[1:3]] == pytest.approx([54.8, 54.8])
     # The scenario YAML files ship beside their module (package-data).
-    assert out[3].split(",") == ["disturbed", "nominal", "orbit"]
+    assert out[3].split(",") == ["disturbed", "nominal", "orbit", "quadrotor_ur3e"]
+    # The robot descriptions ship with the model files.
+    assert out[4].split(",") == ["helicopter_lwr", "quadrotor_ur3e"]
 
 
 def test_model_directory_in_installed_layout(tmp_path):
