@@ -12,6 +12,7 @@ from pydrake.common.yaml import yaml_dump_typed
 from aerial_drake.analysis.report import format_lee, format_open_loop
 from aerial_drake.cli import build_parser, format_summary
 from aerial_drake.cli import main as dut
+from aerial_drake.simulation.metrics import input_names
 from aerial_drake.simulation.scenarios import load_scenario, shipped_scenarios
 from aerial_drake.viz import plots
 from aerial_drake.viz.run_plots import run_labels
@@ -100,8 +101,8 @@ def test_fig6_zooms_on_the_start_and_draws_each_inputs_limits(runs):
     fig = plots.figure_inputs(run)
     u = run.log["applied_command"]
     limits = run.input_limits()
-    index = {n: k for k, n in enumerate(plots.INPUT_NAMES)}
-    for row, names in enumerate(plots.INPUT_ROWS):
+    index = {n: k for k, n in enumerate(input_names(7))}  # the paper's seven arm joints
+    for row, names in enumerate(plots.input_rows(7)):
         full, zoom = fig.axes[2 * row], fig.axes[2 * row + 1]
         data = [line for line in full.get_lines() if len(line.get_xdata()) > 2]
         assert [list(line.get_ydata()) for line in data] == [list(u[:, index[n]])

@@ -18,6 +18,12 @@ def _edit(old: str, new: str) -> str:
     return NOMINAL.replace(old, new, 1)
 
 
+def _actuation(lines: str) -> str:
+    """The nominal scenario with ``lines`` added to its actuation section (the shipped file
+    sets no limit: the robot description's apply unless overridden)."""
+    return _edit("  saturate: true\n", "  saturate: true\n" + lines)
+
+
 #: (id, file content (str, bytes, or None for the shipped nominal), extra options,
 #:  substrings the message must hold (the field, the value)).
 BAD_FILES = [
@@ -57,9 +63,9 @@ BAD_FILES = [
      ["gains.K_x", "[-40.0, 800.0, 800.0]", ".yaml"]),
     ("gain-wrong-length", _edit("K_x: [800.0, 800.0, 800.0]", "K_x: [800.0]"), [],
      ["gains.K_x", "3"]),
-    ("thrust-min-nan", _edit("thrust_min: 0.0", "thrust_min: .nan"), [],
-     ["actuation.thrust_min", ".nan"]),
-    ("thrust-max-below-min", _edit("thrust_max: 980.6", "thrust_max: -1.0"), [],
+    ("thrust-min-inf", _actuation("  thrust_min: .inf\n"), [],
+     ["actuation.thrust_min", ".inf"]),
+    ("thrust-max-below-min", _actuation("  thrust_max: -1.0\n"), [],
      ["actuation.thrust_max", "-1.0"]),
     ("arm-offset-length", _edit("arm_offset: [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]",
                                 "arm_offset: [0.0]"), [], ["initial.arm_offset"]),
@@ -113,8 +119,7 @@ def test_bad_input_is_refused_with_a_message_naming_the_field(tmp_path, capsys, 
 
 
 def test_json_prints_an_error_object_on_failure(tmp_path, capsys):
-    status, out, err = _run(tmp_path, _edit("thrust_min: 0.0", "thrust_min: .nan"), ["--json"],
-                            capsys)
+    status, out, err = _run(tmp_path, _actuation("  thrust_min: .inf\n"), ["--json"], capsys)
     assert status == 2
     error = json.loads(out)["error"]
     assert error["exit_status"] == 2 and error["field"] == "actuation.thrust_min"

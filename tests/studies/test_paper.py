@@ -16,14 +16,17 @@ from aerial_drake import cli
 from aerial_drake.control.law import diagnostics_slices
 from aerial_drake.robots import models
 from aerial_drake.simulation.metrics import (
-    INPUT_NAMES,
     disturbance_response,
+    input_names,
     limits_by_input,
     rotor_metrics,
 )
 from aerial_drake.simulation.scenarios import Disturbance, load_scenario
 from aerial_drake.studies import paper as dut
 from aerial_drake.viz import plots
+
+N_TASK = 7  # the paper's task: end-effector pose and q3 (seven arm joints)
+INPUT_NAMES = input_names(N_TASK)
 
 
 # --- The disturbed scenario -----------------------------------------------------------------
@@ -60,7 +63,7 @@ def test_perturb_initial_is_reproducible_bounded_and_pure():
 
 # --- Metrics helpers ------------------------------------------------------------------------
 def _synthetic_diagnostics(t, ee, com):
-    sl = diagnostics_slices()
+    sl = diagnostics_slices(N_TASK)
     size = max(s.stop for s in sl.values())
     d = np.zeros((len(t), size))
     d[:, sl["ee_position_error"]] = ee[:, None]
@@ -182,7 +185,7 @@ def test_figures_plot_the_logged_data(short_paper):
     rigid = models.make_plant("rigid")
     context = rigid.plant.CreateDefaultContext()
     runs = [plots.load_run(folder / name) for name in dut.PAPER_SCENARIOS]
-    sl = diagnostics_slices()
+    sl = diagnostics_slices(N_TASK)
     for which, figure in (("end_effector", plots.figure_end_effector),
                           ("com", plots.figure_com)):
         fig = figure(*runs)
@@ -213,9 +216,9 @@ def test_figures_plot_the_logged_data(short_paper):
     run = runs[0]
     fig = plots.figure_inputs(run)
     u = run.log["applied_command"]
-    index = {n: k for k, n in enumerate(plots.INPUT_NAMES)}
+    index = {n: k for k, n in enumerate(INPUT_NAMES)}
     zoom = run.t <= plots.ZOOM_S + 1e-12
-    for row, names in enumerate(plots.INPUT_ROWS):  # left: the whole run, right: its start
+    for row, names in enumerate(plots.input_rows(N_TASK)):  # left: the whole run, right: its start
         for ax, mask in ((fig.axes[2 * row], slice(None)), (fig.axes[2 * row + 1], zoom)):
             plotted = _lines(ax)
             assert len(plotted) == len(names)

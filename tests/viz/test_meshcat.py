@@ -147,7 +147,7 @@ def test_drawn_base_attitude_is_the_controllers(watched):
     log = result.log
     rigid, simulated = make_plant("rigid"), make_plant(result.scenario.plant_variant)
     context = rigid.plant.CreateDefaultContext()
-    e_R_slice = diagnostics_slices()["e_R"]
+    e_R_slice = diagnostics_slices(rigid.n)["e_R"]
     frames = np.flatnonzero(np.isclose(np.mod(log["t"] + 1e-9, dut.PUBLISH_PERIOD), 0.0,
                                        atol=1e-6))
     assert len(frames) >= 10
