@@ -61,7 +61,8 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import Context, DiagramBuilder, EventStatus, LeafSystem
 
 from aerial_drake.control.law import desired_attitude, desired_force
-from aerial_drake.robots.models import AerialManipulator, vehicle_extent
+from aerial_drake.robots.extent import vehicle_extent
+from aerial_drake.robots.models import AerialManipulator
 from aerial_drake.simulation.diagram import ClosedLoop
 from aerial_drake.simulation.scenarios import Scenario
 from aerial_drake.trajectories.paper import sample_reference
@@ -173,7 +174,7 @@ def robot_envelope(scenario: Scenario) -> np.ndarray:
     """Points (N, 3) the robot reaches over the run if it tracks: the desired end-effector
     path, and about each desired CoM the vehicle's lowest point (the helicopter's skids) and a
     ring at its highest (its rotor discs' outer rims) as wide as the vehicle, both from the
-    model (:func:`aerial_drake.robots.models.vehicle_extent` of the scenario's plant variant:
+    model (:func:`aerial_drake.robots.extent.vehicle_extent` of the scenario's plant variant:
     the vehicle level at the nominal posture; the ring holds any heading)."""
     extent = vehicle_extent(scenario.plant_variant, scenario.robot_description())
     times = np.linspace(0.0, scenario.duration, int(scenario.duration * PATH_RATE / 5) + 2)
