@@ -33,11 +33,8 @@ def step_time(variant: str, duration: float) -> float:
     builder = DiagramBuilder()
     sim = add_to_builder(builder, variant, time_step=0.0)
     plant = sim.plant
-    for instance in (sim.arm, sim.helicopter):
-        size = plant.num_actuated_dofs(instance)
-        if size:
-            zero = builder.AddSystem(ConstantVectorSource(np.zeros(size)))
-            builder.Connect(zero.get_output_port(), plant.get_actuation_input_port(instance))
+    zero = builder.AddSystem(ConstantVectorSource(np.zeros(plant.num_actuated_dofs())))
+    builder.Connect(zero.get_output_port(), plant.get_actuation_input_port())
     simulator = Simulator(builder.Build())
     ApplySimulatorConfig(scenario.simulator, simulator)
     simulator.Initialize()

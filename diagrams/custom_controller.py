@@ -23,12 +23,13 @@ from pydrake.systems.framework import LeafSystem, ValueProducer
 
 from aerial_drake.control.baselines.vehicle import body_reference, geometric_vehicle_law
 from aerial_drake.control.interface import error_diagnostics
-from aerial_drake.control.law import DIAGNOSTICS_SIZE, GainMatrices
+from aerial_drake.control.law import GainMatrices, diagnostics_size
 from aerial_drake.simulation.controllers import body_offset_in_heading_frame, register_controller
 from aerial_drake.simulation.diagram import build_closed_loop
 from aerial_drake.simulation.runner import reference_configuration, run_scenario
 from aerial_drake.simulation.scenarios import load_scenario
 from aerial_drake.trajectories.reference import (
+    task_reference_size,
     unpack_com_reference,
     unpack_heading_reference,
     unpack_task_reference,
@@ -42,7 +43,7 @@ class JointHoldController(LeafSystem):
         super().__init__()
         self._model, self._plant = model, model.plant
         self._ctx = model.plant.CreateDefaultContext()
-        self._K = GainMatrices.from_gains(scenario.gains)
+        self._K = GainMatrices.from_gains(scenario.gains, n_task=model.n)
         self._offset = body_offset_in_heading_frame(scenario, model)
         self._arm_q = model.arm_position_indices
         self._arm_v = model.arm_velocity_indices
@@ -52,7 +53,8 @@ class JointHoldController(LeafSystem):
         self._J_v = I_B.CalcRotationalInertia().CopyToFullMatrix3()
         self._ports = [self.DeclareVectorInputPort(name, size) for name, size in (
             ("state", model.plant.num_multibody_states()), ("com_reference", 15),
-            ("task_reference", 27), ("heading_reference", 9))]
+            ("task_reference", task_reference_size(model.task.n_joints)),
+            ("heading_reference", 9))]
         n = len(model.arm_joints)
         # The law once per input change, both outputs read from it (a cache entry): not
         # once per output port.
@@ -62,7 +64,7 @@ class JointHoldController(LeafSystem):
                 calc=lambda c, value: value.set_value(self._law(c))),
             prerequisites_of_calc={self.all_input_ports_ticket()})
         for i, (name, size) in enumerate((("command", 4 + n),
-                                          ("diagnostics", DIAGNOSTICS_SIZE))):
+                                          ("diagnostics", diagnostics_size(n)))):
             self.DeclareVectorOutputPort(
                 name, size, lambda c, o, i=i: o.SetFromVector(self._solution.Eval(c)[i]),
                 prerequisites_of_calc={self._solution.ticket()})
@@ -86,11 +88,11 @@ class JointHoldController(LeafSystem):
         X_WE = self._model.end_effector_frame.CalcPoseInWorld(ctx)
         t = unpack_task_reference(task)
         diagnostics = error_diagnostics(
-            x_g=plant.CalcCenterOfMassPositionInWorld(ctx),
+            task=self._model.task, x_g=plant.CalcCenterOfMassPositionInWorld(ctx),
             x_g_dot=plant.CalcCenterOfMassTranslationalVelocityInWorld(ctx),
             com_reference=com_ref, p_WE=X_WE.translation(), R_WE=X_WE.rotation().matrix(),
-            q3=q[self._model.arm_joints[2].position_start()], p_ed=t.p_ed, R_ed=t.R_ed,
-            q3d=float(t.q3d), R_b=R, R_d=veh.R_d, e_R=veh.e_R, w_tilde=veh.e_w,
+            q_j=q[list(self._model.task.joint_positions)], p_ed=t.p_ed, R_ed=t.R_ed,
+            q_jd=t.q_jd, R_b=R, R_d=veh.R_d, e_R=veh.e_R, w_tilde=veh.e_w,
             f_d_norm=veh.F_norm, sigma_min_J3=1.0)
         return np.concatenate([[veh.f], veh.mu, tau]), diagnostics
 
