@@ -287,10 +287,12 @@ def _draw_limit(ax, value, color="0.35", text=None) -> None:
                     textcoords="offset points", va="center", fontsize=8, color=color)
 
 
-#: Fig. 6's rows: the inputs drawn on each (names of :data:`INPUT_NAMES`).
 def input_rows(n: int) -> tuple[tuple[str, ...], ...]:
-    """Fig. 6's rows for a robot with ``n`` arm joints: the inputs drawn on each."""
+    """Fig. 6's rows for a robot with ``n`` arm joints: the inputs drawn on each (names of
+    :func:`aerial_drake.simulation.metrics.input_names`)."""
     return (("thrust",), ("mu_x", "mu_y", "mu_z")) + tuple((f"tau_{j}",) for j in range(1, n + 1))
+
+
 #: Fig. 6's right column: the first ZOOM_S seconds, where the start saturates some inputs.
 ZOOM_S = 0.05
 _ROW_LABELS = {"thrust": "$f$ (N)", "mu_x": "$\\mu$ (N m)"}
