@@ -56,27 +56,32 @@ def _unit_vector(rng: np.random.Generator) -> np.ndarray:
 
 
 def random_windows(scenario: Scenario) -> list[Disturbance]:
-    """The windows ``scenario.random_disturbances`` draws (module docstring of its section)."""
+    """The scenario's windows after its ``random_disturbances`` section's draws (the
+    section's docstring): its own windows, redirected if it asks, then the new ones."""
     r = scenario.random_disturbances
     rng = np.random.default_rng(r.seed)
-    windows = []
+    windows = list(scenario.disturbances)
+    if r.redirect:
+        windows = [dataclasses.replace(
+            d, force=(np.linalg.norm(d.force) * _unit_vector(rng)).tolist(),
+            torque=(np.linalg.norm(d.torque) * _unit_vector(rng)).tolist()) for d in windows]
     for _ in range(int(r.count)):
         start = _draw(rng, r.start)
         length = _draw(rng, r.length)
         force = _draw(rng, r.force) * _unit_vector(rng)
         torque = _draw(rng, r.torque) * _unit_vector(rng)
-        windows.append(Disturbance(target=r.target, start=float(start),
-                                   stop=float(start + length), force=force.tolist(),
-                                   torque=torque.tolist()))
+        windows.append(Disturbance(target=r.target, start=start, stop=start + length,
+                                   force=force.tolist(), torque=torque.tolist()))
     return windows
 
 
 def resolve_random_disturbances(scenario: Scenario) -> Scenario:
-    """``scenario`` with its random windows drawn and appended to ``disturbances`` (and the
-    random section emptied, so resolving twice adds nothing); the same object when it has
+    """``scenario`` with its random windows drawn into ``disturbances`` and the random
+    section reset (so resolving twice draws nothing more); the same object when it asks for
     none. The input is not modified."""
-    if not scenario.random_disturbances.count:
+    r = scenario.random_disturbances
+    if not (r.count or r.redirect):
         return scenario
     return dataclasses.replace(
-        scenario, disturbances=[*scenario.disturbances, *random_windows(scenario)],
-        random_disturbances=dataclasses.replace(scenario.random_disturbances, count=0))
+        scenario, disturbances=random_windows(scenario),
+        random_disturbances=dataclasses.replace(r, count=0, redirect=False))

@@ -145,12 +145,19 @@ class Sensing:
 
 @dataclass
 class RandomDisturbances:
-    """``count`` constant wrench windows on ``target``, each drawn from ``default_rng(seed)``:
-    start uniform in ``start``, length uniform in ``length``, force and torque magnitudes
-    uniform in their ranges, each along its own direction uniform on the sphere. They are
-    added to the scenario's ``disturbances`` before the run (and appear in its scenario.yaml).
+    """Random disturbance windows, drawn from ``default_rng(seed)`` before the run (the drawn
+    windows replace this section's effect in the run's scenario.yaml: ``disturbances`` holds
+    them, ``count`` and ``redirect`` are reset).
+
+    ``redirect``: each of the scenario's own windows keeps its timing and magnitudes, its force
+    and its torque each turned along a direction uniform on the sphere. Then ``count`` new
+    windows on ``target``: start uniform in ``start``, length uniform in ``length``, force and
+    torque magnitudes uniform in their ranges, each along its own uniform direction.
     """
 
+    # Turn the scenario's own windows to random directions.
+    redirect: bool = False
+    # New windows.
     count: int = 0
     target: str = "helicopter"
     # Ranges [low, high] (s, s, N, N m).
@@ -193,6 +200,7 @@ def check_perturbations(s: Any) -> None:
     _check_wind(s.wind)
     _check_sensing(s.sensing, s.controller_period)
     r = s.random_disturbances
+    flag("random_disturbances.redirect", r.redirect)
     number("random_disturbances.count", r.count, COUNT)
     text("random_disturbances.target", r.target, TARGETS)
     for name, allowed in (("start", TIME), ("length", TIME), ("force", MAGNITUDE),
