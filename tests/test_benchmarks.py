@@ -15,6 +15,8 @@ BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
     ("bench_decomposition.py", ["--repeats", "20"], ["compiled", "ratio"]),
     ("bench_sim.py", ["--repeats", "1", "--duration", "0.05", "--scenarios", "nominal"],
      ["nominal", "peak RSS"]),
+    ("bench_study.py", ["--runs", "2", "--duration", "0.05", "--repeats", "1"],
+     ["speed-up", "parallel efficiency", "per-run overhead", "peak RSS per worker"]),
 ])
 def test_benchmark_runs(script, args, expected):
     done = subprocess.run([sys.executable, str(BENCHMARKS / script), *args],

@@ -30,6 +30,8 @@ def cli_study(args: argparse.Namespace) -> int:
         loaded = load_study(args.file, duration=args.duration, draws=args.draws)
     except ScenarioError as err:
         return report_error(args, 2, err)
+    if args.show_run is not None:
+        return _show_run(args, loaded)
     out = Path(args.out) if args.out else Path("out/studies") / loaded.study.name
     say = sys.stderr if args.json else sys.stdout
     where = args.scheduler or f"a local cluster of {args.workers or 'one worker per CPU'}"
@@ -55,6 +57,18 @@ def cli_study(args: argparse.Namespace) -> int:
     if args.json:
         print(strict_json(summary))
     return 0
+
+
+def _show_run(args: argparse.Namespace, loaded: Any) -> int:
+    """Print one run's resolved scenario (by run id or index) as YAML, for ``aerial-drake
+    run``: a single run reproduces it exactly."""
+    from aerial_drake.studies.spec import plan_runs
+    for run in plan_runs(loaded):
+        if args.show_run in (run.run_id, str(run.index)):
+            sys.stdout.write(run.scenario_text)
+            return 0
+    return report_error(args, 2, f"--show-run: no run {args.show_run!r} in study "
+                        f"'{loaded.study.name}' (give a run_id or an index from its table)")
 
 
 def cli_study_plot(args: argparse.Namespace) -> int:
@@ -89,6 +103,10 @@ def add_study_parsers(sub: Any, common: argparse.ArgumentParser) -> None:
     study.add_argument("--duration", type=float, default=None,
                        help="override every run's duration (s)")
     study.add_argument("--draws", type=int, default=None, help="override the number of draws")
+    study.add_argument("--show-run", default=None, metavar="RUN",
+                       help="print the scenario of one run (its run_id or index in the "
+                            "table) as YAML, to reproduce it with 'aerial-drake run FILE.yaml'; "
+                            "runs nothing")
     study.add_argument("--quiet", action="store_true", help="no progress bar")
     study.add_argument("--json", action="store_true", help="also print a JSON summary")
     study.set_defaults(func=cli_study)

@@ -166,3 +166,20 @@ def test_ctrl_c_then_resume_runs_each_run_once(local_rows, tmp_path):
     rows = read_table(table)
     assert len(rows) == 6 and len({r["run_id"] for r in rows}) == 6
     assert _rows(table) == local_rows  # the same rows as one uninterrupted study
+
+
+def test_show_run_reproduces_a_row_in_a_single_run(local_rows, tmp_path):
+    from aerial_drake.simulation.runner import run_scenario
+    from aerial_drake.simulation.scenarios import load_scenario
+    from aerial_drake.studies.metrics_table import flatten_metrics
+    run_id, row = sorted(local_rows.items())[0]
+    shown = subprocess.run([sys.executable, "-m", "aerial_drake.cli", "study", str(SMALL),
+                            "--show-run", run_id], capture_output=True, text=True, timeout=120)
+    assert shown.returncode == 0, shown.stderr
+    path = tmp_path / "run.yaml"
+    path.write_text(shown.stdout)
+    metrics = flatten_metrics(run_scenario(load_scenario(path), progress=False).metrics)
+    kept = [c for c in row if c in metrics]
+    assert kept
+    for column in kept:
+        assert row[column] == ("" if metrics[column] is None else repr(metrics[column]))
