@@ -46,7 +46,12 @@ def test_scale_mode_scales_every_entry():
 
 def test_shipped_studies_load():
     sizes = {name: len(dut.plan_runs(dut.load_study(name))) for name in dut.shipped_studies()}
-    assert sizes == {"robustness": 200, "gains": 25, "gains_attitude": 25}
+    assert sizes == {"robustness": 200, "gains": 25, "gains_attitude": 25, "directions": 200}
+    # The control draws the robustness study's directions, without its model error.
+    robust, control = (dut.plan_runs(dut.load_study(n)) for n in ("robustness", "directions"))
+    for a, b in zip(robust, control):
+        assert a.values["random_disturbances.seed"] == b.values["random_disturbances.seed"]
+        assert b.values["payload.mass"] == 0.0
 
 
 def _write(tmp_path, text):
