@@ -29,6 +29,7 @@ import fnmatch
 import hashlib
 import itertools
 import math
+import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -151,8 +152,7 @@ def _base_scenario(path: Path, study: Study, settings: dict) -> Scenario:
     _, data = read_scenario_file(base_path)
     merged = _deep_merge(data, settings)
     overrides = {} if math.isnan(study.duration) else {"duration": study.duration}
-    # load_scenario reads a file: the merged scenario goes to one beside nothing else.
-    import tempfile
+    # load_scenario reads a file (and names it in its errors, replaced below by the study's).
     with tempfile.TemporaryDirectory() as folder:
         merged_path = Path(folder) / f"{study.name}_base.yaml"
         merged_path.write_text(yaml_dump(merged))

@@ -68,11 +68,10 @@ class ResultsTable:
             raise OutputError(f"{path} holds the results of a study with other columns "
                               f"(parameters or metrics differ): give another --out, or "
                               "remove the file to start again")
-        kept = [row for row in reader if len(row) == len(columns)]
-        table.rows = [dict(zip(columns, row)) for row in kept
-                      if dict(zip(columns, row))["failure_kind"] not in RETRIED_KINDS]
-        if len(table.rows) != len(kept) or complete != text or len(kept) != \
-                complete.count("\n") - 1:
+        found = list(reader)
+        rows = [dict(zip(columns, cells)) for cells in found if len(cells) == len(columns)]
+        table.rows = [row for row in rows if row["failure_kind"] not in RETRIED_KINDS]
+        if complete != text or len(table.rows) != len(found):  # drop what is not kept
             body = "".join(table._line([r[c] for c in columns]) for r in table.rows)
             write_text_atomically(path, table._line(columns) + body)
         return table
