@@ -94,7 +94,8 @@ def write_study_plots(table: str | Path, out: str | Path,
     for ax, (q, label, scale, unit) in zip(axes[0], shown):
         data = [[scale * _float(r[c]) for r in done if math.isfinite(_float(r[c]))]
                 for c in phase_columns[q]]
-        ax.boxplot(data, labels=[f"phase {k}" for k in range(len(data))])
+        ax.boxplot(data)
+        ax.set_xticks(range(1, len(data) + 1), [f"phase {k}" for k in range(len(data))])
         ax.set_yscale("log")
         ax.set_ylabel(f"max {label} ({unit})")
     fig.tight_layout()
