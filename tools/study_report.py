@@ -74,6 +74,14 @@ def report(path: Path, study: str | None) -> str:
     for r in sorted(done, key=lambda r: -_worst(r, ee))[:5]:
         lines.append(f"| {r['index']} | {r['run_id']} | " + " | ".join(r[p] for p in params)
                      + f" | {1e3 * _worst(r, ee):.1f} | {1e3 * _worst(r, com):.1f} |")
+    failed = [r for r in rows if r["completed"] != "true"]
+    if failed:
+        lines += ["", "Earliest failures:", "",
+                  "| index | run_id | " + " | ".join(p.removeprefix("param.") for p in params)
+                  + " | failed at (s) |", "|---" * (len(params) + 3) + "|"]
+        for r in sorted(failed, key=lambda r: _f(r["simulated_time_s"]))[:5]:
+            lines.append(f"| {r['index']} | {r['run_id']} | " + " | ".join(r[p] for p in params)
+                         + f" | {_f(r['simulated_time_s']):.3f} |")
     grid = [p for p in params if 1 < len({r[p] for r in rows}) <= 20]
     if len(grid) == 2 and len(params) == 2:
         lines += ["", *_map(rows, grid, ee)]
