@@ -1,5 +1,5 @@
 """Command line: ``aerial-drake run SCENARIO``, ``plot RUN_DIR ...``, ``scenarios [show NAME]``,
-``compare SCENARIO``, ``info`` and ``analyze``.
+``compare SCENARIO``, ``info``, ``analyze``, ``study FILE`` and ``study-plot TABLE``.
 
 ``SCENARIO`` is a shipped scenario name (``nominal``) or a path to a YAML file.
 """
@@ -14,6 +14,7 @@ from typing import TextIO
 
 import numpy as np
 
+from aerial_drake.studies.cli_study import add_study_parsers
 from aerial_drake.studies.reporting import report_error
 
 # (The standard library only: importing it starts and compiles nothing.)
@@ -451,6 +452,7 @@ def build_parser() -> argparse.ArgumentParser:
                          "draws")
     analyze.add_argument("--quiet", action="store_true", help="no progress lines")
     analyze.set_defaults(func=_cmd_analyze)
+    add_study_parsers(sub, common)  # study, study-plot (aerial_drake.studies.cli_study)
     return parser
 
 

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from pydrake.multibody.plant import ExternallyAppliedSpatialForceMultiplexer
@@ -48,8 +49,10 @@ from aerial_drake.simulation.actuators import (
 )
 from aerial_drake.simulation.controllers import ControllerFactory
 from aerial_drake.simulation.controllers import controller_factory as scenario_controller_factory
-from aerial_drake.simulation.disturbances import add_wrench_source
+from aerial_drake.simulation.disturbances import add_wrench_source, resolve_random_disturbances
 from aerial_drake.simulation.scenarios import Scenario
+from aerial_drake.simulation.sensing import add_state_sensor
+from aerial_drake.simulation.wind import add_wind
 from aerial_drake.trajectories.generator import ReferenceGenerator
 
 
@@ -70,6 +73,8 @@ class ClosedLoop:
     n_arm: int
     inputs: dict[str, InputPort] = field(default_factory=dict)
     outputs: dict[str, OutputPort] = field(default_factory=dict)
+    # The scenario's StateSensor between the plant and the controller (None without sensing).
+    sensor: Any = None
 
     def input_port(self, name: str) -> InputPort:
         """The closed loop's input port ``name`` (``helicopter_wrench``, ...)."""
@@ -247,15 +252,19 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
         outputs[port] = reference.GetOutputPort(port)
 
     state_out = plant.get_state_output_port()
+    model_state = state_out
     nx = sim.plant.num_multibody_states()
-    if np.array_equal(sim.rigid_state_indices, np.arange(nx)):
-        builder.Connect(state_out, controller.GetInputPort("state"))
-    else:
+    if not np.array_equal(sim.rigid_state_indices, np.arange(nx)):
         # The variant's state without its rotors' coordinates is the rigid model's.
         selector = builder.AddSystem(MatrixGain(np.eye(nx)[sim.rigid_state_indices]))
         selector.set_name("model_state")
         builder.Connect(state_out, selector.get_input_port())
-        builder.Connect(selector.get_output_port(), controller.GetInputPort("state"))
+        model_state = selector.get_output_port()
+    # What the controller measures: the state itself, or delayed and noisy (sensing).
+    measured, sensor = add_state_sensor(builder, scenario.sensing, model,
+                                        scenario.controller_period, scenario.duration,
+                                        model_state)
+    builder.Connect(measured, controller.GetInputPort("state"))
 
     command = controller.GetOutputPort("command")
     outputs["command"] = command
@@ -292,7 +301,7 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
     outputs["query_object"] = sim.scene_graph.get_query_output_port()
     return ClosedLoop(diagram=None, simulated_plant=sim, controller_model=model,
                       controller=controller, reference=reference, lag=lag, n_arm=n,
-                      inputs=inputs, outputs=outputs)
+                      inputs=inputs, outputs=outputs, sensor=sensor)
 
 
 def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: Scenario,
@@ -337,11 +346,16 @@ def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = Non
     (``diagram`` None; its ports by name) and the loggers by port name.
     """
     builder = builder or DiagramBuilder()
+    scenario = resolve_random_disturbances(scenario)
     loop = add_closed_loop(builder, scenario, controller_factory=controller_factory)
+    sim = loop.simulated_plant
     for target, port in (("helicopter", "helicopter_wrench"),
                          ("end_effector", "end_effector_wrench")):
-        source = add_wrench_source(builder, scenario.disturbances, target)
-        builder.Connect(source.get_output_port(), loop.input_port(port))
+        wrench = add_wrench_source(builder, scenario.disturbances, target).get_output_port()
+        if target == "helicopter":  # the wind's drag acts beside the windows (wind.py)
+            wrench = add_wind(builder, scenario.wind, scenario.duration, sim.plant,
+                              sim.base_body, wrench)
+        builder.Connect(wrench, loop.input_port(port))
     loggers = {}
     for port in LOGGED_PORTS:
         if loop.has_output_port(port):

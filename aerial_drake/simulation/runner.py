@@ -22,6 +22,7 @@ from aerial_drake.control.compiled import compile_law
 from aerial_drake.control.law import AssumptionViolation, diagnostics_layout
 from aerial_drake.simulation.controllers import ControllerFactory
 from aerial_drake.simulation.diagram import ClosedLoop, build_simulation, input_limits
+from aerial_drake.simulation.disturbances import resolve_random_disturbances
 from aerial_drake.simulation.feasibility import check_start_posture, check_workspace
 from aerial_drake.simulation.interrupts import deferred, handling, signal_name
 from aerial_drake.simulation.metrics import (
@@ -43,6 +44,7 @@ from aerial_drake.simulation.outputs import (
     strict_json,
     write_result_set,
 )
+from aerial_drake.simulation.perturbations import start_perturbations
 from aerial_drake.simulation.reference_pose import reference_configuration
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
 from aerial_drake.simulation.scenarios.checks import REALTIME, estimated_log_mb, number
@@ -53,7 +55,11 @@ _BASE_DIAGNOSTICS = sum(size for _, size in diagnostics_layout(0))
 
 
 class SimulationFailed(RuntimeError):
-    """The closed loop could not be simulated to the end; the message says when and why."""
+    """The closed loop could not be simulated to the end; the message says when and why.
+    ``result``: the run up to the failure (its log and metrics), where the runner got that
+    far (studies record its metrics in the failed run's row)."""
+
+    result: RunResult | None = None
 
 
 class SimulationInterrupted(SimulationFailed):
@@ -300,6 +306,8 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
                             f"{scenario!r}; load one with aerial_drake.simulation.scenarios."
                             "load_scenario(name_or_path)", "scenario")
     scenario.validate()
+    # Random windows drawn into concrete ones: the metrics' phases and scenario.yaml see them.
+    scenario = resolve_random_disturbances(scenario)
     if realtime_rate is not None:  # the range of simulator.target_realtime_rate
         number("realtime_rate", realtime_rate, REALTIME)
     need_mb = estimated_log_mb(scenario.duration, scenario.log_period)
@@ -344,6 +352,7 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
     x0 = loop.simulated_plant.plant.GetPositionsAndVelocities(plant_context)
     check_start_posture(scenario, loop.controller_model,
                         x0[loop.simulated_plant.rigid_state_indices])
+    start_perturbations(scenario, loop, context)  # model mismatch, payload, sensor's delay
     if before_start is not None:
         before_start()
     progress_lines = _Progress(scenario.duration, stream if progress else None)
@@ -380,7 +389,9 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
         raise SimulationInterrupted(f"scenario '{scenario.name}' stopped: {failure}",
                                     interrupted)
     if failure is not None:
-        raise SimulationFailed(f"scenario '{scenario.name}' stopped: {failure}")
+        error = SimulationFailed(f"scenario '{scenario.name}' stopped: {failure}")
+        error.result = result
+        raise error
     return result
 
 

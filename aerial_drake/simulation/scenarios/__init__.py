@@ -37,6 +37,14 @@ from aerial_drake.simulation.scenarios.checks import (
     folder_name,
     show,
 )
+from aerial_drake.simulation.scenarios.perturbations import (
+    ModelMismatch,
+    Payload,
+    RandomDisturbances,
+    Sensing,
+    Wind,
+    check_perturbations,
+)
 from aerial_drake.simulation.scenarios.reading import read_scenario_file
 from aerial_drake.trajectories.paper import TrajectoryParams
 
@@ -146,12 +154,22 @@ class Scenario:
     # Refuse a run whose estimated log (held in memory) exceeds this (MB; docs/reliability.md).
     max_log_mb: float = DEFAULT_MAX_LOG_MB
 
+    # Perturbations (docs/studies.md), all off by default: the simulated plant's inertial
+    # parameters apart from the controller's model, a payload unknown to the controller, wind,
+    # noisy and delayed measurements, random disturbance windows.
+    model_mismatch: ModelMismatch = field(default_factory=ModelMismatch)
+    payload: Payload = field(default_factory=Payload)
+    wind: Wind = field(default_factory=Wind)
+    sensing: Sensing = field(default_factory=Sensing)
+    random_disturbances: RandomDisturbances = field(default_factory=RandomDisturbances)
+
     def validate(self) -> "Scenario":
         """Check every value (type, finiteness, range, consistency: :mod:`.checks`); raise
         ScenarioError naming the field, the value, the allowed range and the fix. Returns
         self."""
         check_values(self, robot_facts(self), DISTURBANCE_TARGETS)
         self._validate_controller()
+        check_perturbations(self)
         return self
 
     def robot_description(self) -> RobotDescription:

@@ -1,0 +1,90 @@
+"""Running a study's runs on Dask (``dask.distributed``): a local cluster by default, or any
+cluster by its scheduler's address.
+
+The local cluster is ``LocalCluster(n_workers=N, threads_per_worker=1, processes=True)``:
+processes, one thread each, because Drake diagrams do not pickle and Python systems hold the
+GIL; each task carries its scenario as text and the worker builds its own diagram
+(:mod:`aerial_drake.studies.worker`). Its scheduler allows one failure per task
+(``distributed.scheduler.allowed-failures: 1``): a worker that dies is replaced by its nanny
+and the run it held is retried once on a live worker, then reported as ``KilledWorker`` and
+recorded as failed (kind "worker"). A cluster of your own (``--scheduler``) keeps its own
+setting: start its scheduler with ``DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES=1`` for the
+same rule (docs/studies.md).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Callable, Iterator
+from concurrent.futures import CancelledError
+from contextlib import contextmanager
+from typing import Any
+
+from aerial_drake.studies.spec import PlannedRun
+from aerial_drake.studies.worker import ensure_warm, run_planned
+
+#: Retries of a run whose worker died, on the local cluster (module docstring).
+ALLOWED_FAILURES = 1
+
+
+@contextmanager
+def study_client(workers: int | None = None,
+                 scheduler: str | None = None) -> Iterator[tuple[Any, dict[str, Any]]]:
+    """A Dask client on a new local cluster of ``workers`` processes (default: one per CPU)
+    or on the scheduler at ``scheduler``; yields ``(client, description)``. Every worker is
+    warmed (:func:`~aerial_drake.studies.worker.ensure_warm`) before it takes a run. The
+    local cluster is closed on the way out, whatever happened."""
+    import dask
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        client = Client(scheduler, timeout="30s")
+        cluster = None
+    else:
+        n = workers or os.cpu_count() or 1
+        with dask.config.set({"distributed.scheduler.allowed-failures": ALLOWED_FAILURES}):
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=logging.ERROR)
+        client = Client(cluster)
+    try:
+        client.run(ensure_warm)  # one worker of a machine compiles, the others then load
+        info = {"scheduler": scheduler or "local",
+                "workers": len(client.scheduler_info()["workers"]),
+                "threads_per_worker": 1 if scheduler is None else None}
+        yield client, info
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def _failed_row(kind: str, message: str) -> dict[str, Any]:
+    return {"completed": False, "failure_kind": kind, "failure": " ".join(message.split())}
+
+
+def execute(client: Any, runs: list[PlannedRun],
+            on_row: Callable[[PlannedRun, dict[str, Any]], None]) -> None:
+    """Submit ``runs`` and call ``on_row(run, row)`` as each finishes, in the order they
+    finish. A signal (KeyboardInterrupt) cancels the runs not finished and is raised again;
+    the rows already given are the caller's to keep."""
+    from distributed import KilledWorker, as_completed
+
+    futures = {client.submit(run_planned, run.scenario_text, pure=False): run for run in runs}
+    try:
+        for future in as_completed(futures):
+            run = futures[future]
+            try:
+                row = future.result()
+            except KilledWorker as err:
+                row = _failed_row("worker", f"its worker died while running it, twice "
+                                  f"(retried once): {err}")
+            except CancelledError as err:  # (distributed's FutureCancelledError)
+                row = _failed_row("worker", f"cancelled by the cluster: {err}")
+            except Exception as err:  # noqa: BLE001 - the task's own error, as its row
+                row = _failed_row("error", f"{type(err).__name__}: {err}")
+            on_row(run, row)
+    finally:
+        pending = [f for f in futures if not f.done()]
+        if pending:
+            client.cancel(pending)

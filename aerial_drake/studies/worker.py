@@ -1,0 +1,87 @@
+"""One study run, as a Dask task (or a plain call): build the scenario from its text, simulate
+it, and return its row. Module-level functions only, so Dask pickles them by reference; a
+Drake diagram does not pickle, so each worker builds its own from the text.
+
+Workers start warm: :func:`ensure_warm` compiles the numba kernels (or loads them from numba's
+on-disk cache) once per process, under a lock file shared by every worker of a machine, so
+that the first compiles and writes the cache while the others wait, then load it (a cold
+cache compiled by every worker at once costs that many times the memory, and the time).
+"""
+
+from __future__ import annotations
+
+import fcntl
+import os
+import socket
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from aerial_drake.dynamics.equilibrium import UnreachablePose
+from aerial_drake.simulation.runner import (
+    SimulationFailed,
+    SimulationInterrupted,
+    compile_kernels,
+    run_scenario,
+)
+from aerial_drake.simulation.scenarios import ScenarioError
+from aerial_drake.studies.metrics_table import flatten_metrics
+from aerial_drake.studies.spec import scenario_from_text
+
+_warm: list[bool] = []
+
+
+def warm_lock_path() -> Path:
+    """The machine's lock file for compiling the kernels (one per user)."""
+    return Path(tempfile.gettempdir()) / f"aerial_drake_kernels_{os.getuid()}.lock"
+
+
+def ensure_warm() -> None:
+    """Compile or load the numba kernels once in this process, one process of the machine at
+    a time (module docstring)."""
+    if _warm:
+        return
+    with open(warm_lock_path(), "a") as lock:
+        fcntl.flock(lock.fileno(), fcntl.LOCK_EX)
+        try:
+            compile_kernels()
+        finally:
+            fcntl.flock(lock.fileno(), fcntl.LOCK_UN)
+    _warm.append(True)
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def run_planned(scenario_text: str) -> dict[str, Any]:
+    """Run the scenario of ``scenario_text``; its row: ``completed``, ``failure_kind``
+    ("" / "simulation": the run failed, e.g. divergence or an assumption violated / "error":
+    it could not be built or raised), ``failure``, ``wall_time_s``, ``worker`` and the
+    flattened metrics (those of the run up to its failure, where it got that far)."""
+    ensure_warm()
+    start = time.perf_counter()
+    metrics: dict = {}
+    completed, kind, failure = True, "", ""
+    try:
+        metrics = run_scenario(scenario_from_text(scenario_text), progress=False).metrics
+    except SimulationInterrupted:  # (only in a main thread: a plain call) stops the caller
+        raise
+    except SimulationFailed as err:
+        completed, kind, failure = False, "simulation", _one_line(str(err))
+        if err.result is not None:
+            metrics = err.result.metrics
+    except (ScenarioError, UnreachablePose) as err:
+        completed, kind, failure = False, "error", _one_line(f"{type(err).__name__}: {err}")
+    except Exception as err:  # noqa: BLE001 - a run's bug is its row, never the study's end
+        completed, kind, failure = False, "error", _one_line(f"{type(err).__name__}: {err}")
+    return {"completed": completed, "failure_kind": kind, "failure": failure,
+            "wall_time_s": time.perf_counter() - start,
+            "worker": f"{socket.gethostname()}:{os.getpid()}", **flatten_metrics(metrics)}
+
+
+def peak_memory_mb() -> float:
+    """This process's peak resident memory (MB), for the benchmark."""
+    import resource
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
