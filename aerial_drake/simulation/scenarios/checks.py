@@ -17,6 +17,8 @@ from typing import Any, NoReturn
 
 from pydrake.systems.analysis import GetIntegrationSchemes
 
+from aerial_drake.robots.task import POSE_ROW_LABELS, orientation_positions, parse_task
+
 #: Floats per logged sample, an upper bound over the plant variants (time, plant state,
 #: commands, diagnostics, references, rotor drive): what the log-size estimate multiplies.
 LOG_FLOATS_PER_SAMPLE = 160
@@ -216,6 +218,8 @@ def check_values(s: Any, robot: RobotFacts, targets: tuple[str, ...]) -> None:
               "the log needs at least two samples")
     _check_simulator(s.simulator)
     _check_gains(s.gains, gain_sizes)
+    # The description is loaded (and its task parsed) by robot_facts before this runs.
+    _check_orientation_gains(s.gains.K_y, parse_task(s.robot_description().task).rows)
     for name, (size, allowed) in TRAJECTORY.items():
         value = getattr(s.trajectory, name)
         if size is None:
@@ -292,6 +296,36 @@ def _check_gains(g: Any, sizes: dict[str, int]) -> None:
                     f"{show(v)} ({GAIN.fix})")
     for name in ("k_R", "k_w", "lyapunov_gamma1", "lyapunov_gamma2"):
         number(f"gains.{name}", getattr(g, name), GAIN)
+
+
+#: The per-axis decay rates measured with K_y's orientation entries [8, 8, 8] x unequal
+#: factors (docs/control.md, "The orientation error and K_y"); quoted in the refusal.
+ANISOTROPIC_DECAY_ERROR = "up to 12 %"
+
+
+def _check_orientation_gains(K_y: list[float], rows: tuple[int, ...]) -> None:
+    """Refuse unequal K_y entries on the orientation rows (docs/control.md).
+
+    The orientation error e_o = vee(skew(R_E R_ed^T)) has the rate
+    w_E - w_ed + w_ed x e_o + O(|e_o|^2), while the law's task velocity error is
+    w_E - w_ed (17): so (23d), y~_dot = -K_y y~ + z~, holds for e_o per axis only to first
+    order. With equal orientation gains k, w_ed x e_o is orthogonal to e_o and |e_o| still
+    decays at k; with unequal ones the rotation mixes the axes and each decays at another rate
+    (and (24)-(26) get an uncancelled term)."""
+    at = orientation_positions(rows)
+    values = [K_y[k] for k in at]
+    if values and max(values) != min(values):
+        labels = ", ".join(POSE_ROW_LABELS[rows[k]] for k in at)
+        raise _error(
+            "gains.K_y",
+            f"gains.K_y = {show(K_y)}: its orientation entries (task rows "
+            f"{', '.join(str(k + 1) for k in at)}: {labels}) are unequal, {show(values)}. "
+            "The orientation error vee(skew(R_E R_ed^T)) changes at w_E - w_ed + w_ed x e, "
+            "not at the velocity error w_E - w_ed the law drives, so with unequal gains the "
+            "task dynamics (23d) do not hold per axis (measured: decay rates off by "
+            f"{ANISOTROPIC_DECAY_ERROR}); with equal ones the error's norm decays at the gain "
+            f"exactly. Make the orientation entries equal (e.g. all {show(float(values[0]))};"
+            " docs/control.md)")
 
 
 def _check_actuation(a: Any, robot_thrust: tuple[float, float]) -> None:
