@@ -22,7 +22,11 @@ from aerial_drake.control.compiled import compile_law
 from aerial_drake.control.law import AssumptionViolation, diagnostics_layout
 from aerial_drake.simulation.controllers import ControllerFactory
 from aerial_drake.simulation.diagram import ClosedLoop, build_simulation, input_limits
-from aerial_drake.simulation.feasibility import check_reference, check_start_posture
+from aerial_drake.simulation.feasibility import (  # check_workspace: re-exported, as before
+    check_reference,
+    check_start_posture,
+    check_workspace,  # noqa: F401
+)
 from aerial_drake.simulation.interrupts import deferred, handling, signal_name
 from aerial_drake.simulation.metrics import (
     compute_metrics,
