@@ -129,12 +129,13 @@ def solve_configuration(manip: AerialManipulator, *, p_WG: np.ndarray, R_WB: np.
 
 
 def _newton_polish(manip: AerialManipulator, q: np.ndarray, *, p_WG, R_WB, p_WE, R_WE, q_j,
-                   iterations: int = 8) -> np.ndarray:
+                   iterations: int = 8, context=None) -> np.ndarray:
     """Newton steps on the square system (CoM and the task in base position and joints), with
-    the base attitude set exactly: IK's orientation constraints are only met to ~1e-5 rad."""
+    the base attitude set exactly: IK's orientation constraints are only met to ~1e-5 rad.
+    ``context``: a context of ``manip.plant`` to work in (else a new one); on return it holds
+    the result's positions."""
     plant = manip.plant
-    task = _task(manip)
-    ctx = plant.CreateDefaultContext()
+    ctx = plant.CreateDefaultContext() if context is None else context
     plant.SetPositions(ctx, q)
     p_WB = plant.EvalBodyPoseInWorld(ctx, manip.base_body).translation()
     q = nominal_positions(manip, p_WB=p_WB, R_WB=R_WB) if manip.floating_base == "quaternion" \
@@ -147,27 +148,65 @@ def _newton_polish(manip: AerialManipulator, q: np.ndarray, *, p_WG, R_WB, p_WE,
     base_q = manip.base_position_indices[-3:]  # translation coordinates
     cols = np.concatenate([manip.base_velocity_indices[3:], manip.arm_velocity_indices])
     unknowns = np.concatenate([base_q, manip.arm_position_indices])
-    world, frame = plant.world_frame(), manip.end_effector_frame
-    kV = JacobianWrtVariable.kV
-    nv = plant.num_velocities()
     for _ in range(iterations):
         plant.SetPositions(ctx, q)
         r = np.concatenate([plant.CalcCenterOfMassPositionInWorld(ctx) - p_WG,
                             task_residual(manip, ctx, q, p_WE, R_WE, q_j)])
         if np.abs(r).max() < 1e-13:
             break
-        J = np.zeros((3 + task.n, nv))
-        J[0:3] = plant.CalcJacobianCenterOfMassTranslationalVelocity(ctx, kV, world, world)
-        Jv = plant.CalcJacobianSpatialVelocity(ctx, kV, frame, np.zeros(3), world, world)
-        J6 = np.vstack([Jv[3:], Jv[:3]])  # [v_E; w_E]
-        for i, row in enumerate(task.rows):
-            if row < POSE_ROWS:
-                J[3 + i] = J6[row]
-            else:
-                J[3 + i, task.joint_velocities[row - POSE_ROWS]] = 1.0
-        step = np.linalg.lstsq(J[:, cols], r, rcond=None)[0]
+        step = np.linalg.lstsq(_com_task_jacobian(manip, ctx)[:, cols], r, rcond=None)[0]
         q[unknowns] -= step
+    plant.SetPositions(ctx, q)
     return q
+
+
+def _com_task_jacobian(manip: AerialManipulator, ctx) -> np.ndarray:
+    """[J_g; J_y] (3 + n, nv) at ``ctx``: the CoM's translational Jacobian over the task's
+    rows of [v_E (World); w_E (World); q_j_dot] (the rows of (17)'s J_y)."""
+    plant, task = manip.plant, _task(manip)
+    world, kV = plant.world_frame(), JacobianWrtVariable.kV
+    J = np.zeros((3 + task.n, plant.num_velocities()))
+    J[0:3] = plant.CalcJacobianCenterOfMassTranslationalVelocity(ctx, kV, world, world)
+    Jv = plant.CalcJacobianSpatialVelocity(ctx, kV, manip.end_effector_frame, np.zeros(3),
+                                           world, world)
+    J6 = np.vstack([Jv[3:], Jv[:3]])  # [v_E; w_E]
+    for i, row in enumerate(task.rows):
+        if row < POSE_ROWS:
+            J[3 + i] = J6[row]
+        else:
+            J[3 + i, task.joint_velocities[row - POSE_ROWS]] = 1.0
+    return J
+
+
+def kinematic_J3(manip: AerialManipulator, ctx) -> np.ndarray:
+    """J_3 of (17), (n, n), at the positions in ``ctx``, from kinematics alone.
+
+    J = J_y T^-1 and T^-1's last n columns are Z^T = [0; -A_q; E_n] (Section II: J_g Z^T = 0,
+    J_bw Z^T = 0 and N Z^T = (Z M Z^T)^-1 Z M Z^T = E_n), so J_3 = J_y Z^T: the task's rate
+    when the joints move while the base translates to hold the CoM and keeps its attitude.
+    No mass matrix: about a tenth of the cost of :class:`~.decoupling.DecoupledDynamics`
+    (equal to its J_3 to round-off; tests/simulation/test_feasibility.py).
+    """
+    J = _com_task_jacobian(manip, ctx)
+    lin, arm = manip.base_velocity_indices[3:], manip.arm_velocity_indices
+    A_q = J[0:3, arm]
+    return J[3:, arm] - J[3:, lin] @ A_q
+
+
+def track_configuration(manip: AerialManipulator, q_guess: np.ndarray, context, *, p_WG,
+                        R_WB, p_WE, R_WE, q_j=(), tolerance: float = 1e-6) -> np.ndarray | None:
+    """The configuration of :func:`solve_configuration` by Newton steps alone from a nearby
+    ``q_guess`` (e.g. the solution at the previous sample of a reference), in ``context``
+    (left at the result); None if they do not meet the targets to ``tolerance`` (m, rad),
+    and the caller falls back to :func:`solve_configuration`. A few Newton steps cost about
+    a tenth of the full solve (no optimisation program is built)."""
+    q = _newton_polish(manip, np.asarray(q_guess, dtype=float), p_WG=p_WG, R_WB=R_WB,
+                       p_WE=p_WE, R_WE=R_WE, q_j=np.asarray(q_j, dtype=float),
+                       context=context)
+    plant = manip.plant
+    r = np.concatenate([plant.CalcCenterOfMassPositionInWorld(context) - p_WG,
+                        task_residual(manip, context, q, p_WE, R_WE, q_j)])
+    return q if np.all(np.isfinite(q)) and np.abs(r).max() <= tolerance else None
 
 
 def _rpy(R: np.ndarray) -> np.ndarray:

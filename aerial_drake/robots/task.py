@@ -105,6 +105,12 @@ def parse_task(components: list[str] | tuple[str, ...]) -> TaskComponents:
     return TaskComponents(tuple(components), tuple(rows), tuple(joints))
 
 
+def orientation_positions(rows: tuple[int, ...]) -> tuple[int, ...]:
+    """Where the orientation rows (3-5 of y_full) sit in a task vector with ``rows``: the
+    entries of K_y, K_z that act on the orientation error e_o."""
+    return tuple(k for k, r in enumerate(rows) if 3 <= r < POSE_ROWS)
+
+
 def valid_components() -> str:
     return ", ".join([*POSE_COMPONENTS, "joint:<name>"])
 

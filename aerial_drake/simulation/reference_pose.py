@@ -12,6 +12,7 @@ from aerial_drake.control.law import desired_attitude, desired_force
 from aerial_drake.dynamics.equilibrium import solve_configuration
 from aerial_drake.robots.models import AerialManipulator
 from aerial_drake.trajectories.paper import evaluate_reference
+from aerial_drake.trajectories.reference import ReferenceSample
 
 
 def reference_configuration(scenario: Any, model: AerialManipulator,
@@ -22,17 +23,29 @@ def reference_configuration(scenario: Any, model: AerialManipulator,
     :class:`~aerial_drake.simulation.scenarios.Scenario`; not imported here, as the scenarios
     import the controllers, which import this.)"""
     ref = evaluate_reference(scenario.trajectory, t, model.task_joint_nominal())
-    m = model.plant.CalcTotalMass(model.plant.CreateDefaultContext())
-    g = -model.plant.gravity_field().gravity_vector()[2]
+    # Joint limits are not imposed: the simulated plant does not enforce them, and at t = 0 the
+    # paper's reference needs joint 6 about 0.19 rad past its 120 deg (docs/control.md).
+    return solve_configuration(model, **realising_targets(model, ref),
+                               respect_joint_limits=False)
+
+
+def realising_targets(model: AerialManipulator, ref: ReferenceSample,
+                      mass_gravity: tuple[float, float] | None = None) -> dict[str, Any]:
+    """The targets of :func:`~aerial_drake.dynamics.equilibrium.solve_configuration` that
+    realise the reference sample ``ref`` (one time): CoM on x_d, base attitude R_d of (13)
+    for zero CoM error, end effector on (p_ed, R_ed), the task's joints on q_jd.
+    ``mass_gravity``: (m, g) of the model if known (:func:`mass_and_gravity`)."""
+    m, g = mass_and_gravity(model) if mass_gravity is None else mass_gravity
     x = ref.com
     zero = np.zeros(3)
     # (10) with zero CoM error; its derivatives are then m times x_d's 3rd and 4th.
     f_d = desired_force(m, g, x, zero, zero, zero, zero)
     R_d = desired_attitude(f_d, m * x[3], m * x[4], ref.b1d)[0]
-    # Joint limits are not imposed: the simulated plant does not enforce them, and at t = 0 the
-    # paper's reference needs joint 6 about 0.19 rad past its 120 deg (docs/control.md).
-    return solve_configuration(model, p_WG=x[0], R_WB=R_d, p_WE=ref.p_ed, R_WE=ref.R_ed,
-                               q_j=ref.q_jd,
-                               respect_joint_limits=False)
+    return dict(p_WG=x[0], R_WB=R_d, p_WE=ref.p_ed, R_WE=ref.R_ed, q_j=ref.q_jd)
 
 
+def mass_and_gravity(model: AerialManipulator) -> tuple[float, float]:
+    """The model's total mass m (kg) and gravity g (m/s^2, along -z) of (9a)."""
+    plant = model.plant
+    return (plant.CalcTotalMass(plant.CreateDefaultContext()),
+            -plant.gravity_field().gravity_vector()[2])

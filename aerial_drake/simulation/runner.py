@@ -23,7 +23,7 @@ from aerial_drake.control.law import AssumptionViolation, diagnostics_layout
 from aerial_drake.simulation.controllers import ControllerFactory
 from aerial_drake.simulation.diagram import ClosedLoop, build_simulation, input_limits
 from aerial_drake.simulation.disturbances import resolve_random_disturbances
-from aerial_drake.simulation.feasibility import check_start_posture, check_workspace
+from aerial_drake.simulation.feasibility import check_reference, check_start_posture
 from aerial_drake.simulation.interrupts import deferred, handling, signal_name
 from aerial_drake.simulation.metrics import (
     compute_metrics,
@@ -331,7 +331,7 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
     if lock is not None:
         _note_replaced_results(scenario, lock.folder, stream)
     builder, loop, loggers = build_simulation(scenario, controller_factory=controller_factory)
-    check_workspace(scenario, loop.controller_model)
+    check_reference(scenario, loop.controller_model)
     if getattr(loop.controller, "compiled", True) is False:
         # Said once: every valid description is compiled today (quaternion base, revolute
         # and weld joints); this is for a structure a later change admits.
