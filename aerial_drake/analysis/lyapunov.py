@@ -158,7 +158,7 @@ def lyapunov_study(base: Scenario | str = "nominal", *,
 def trajectory_accel_bound(scenario: Scenario, m: float, samples: int = 2001) -> float:
     """``max |m x_d'' + m g e3|`` over the scenario's trajectory (Assumption 3's bound), g
     from the plant's gravity field."""
-    from aerial_drake.trajectories.paper import sample_reference
+    from aerial_drake.trajectories.kinds import sample_reference
     t = np.linspace(0.0, scenario.duration, samples)
     ref = sample_reference(scenario.trajectory, t)
     gravity = scenario.controller_model().plant.gravity_field().gravity_vector()

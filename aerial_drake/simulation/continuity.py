@@ -16,7 +16,7 @@ samples a period ``h`` apart (:func:`find_discontinuity`):
   the tolerance the difference's own truncation error allows (a sixth of the derivative's
   second difference, times :data:`MISMATCH_RATIO`), re-checked at h / 16 where it fails.
 
-The reference comes through :func:`aerial_drake.trajectories.paper.sample_reference`, so the
+The reference comes through :func:`aerial_drake.trajectories.kinds.sample_reference`, so the
 test serves every reference kind.
 """
 

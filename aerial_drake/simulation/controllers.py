@@ -18,7 +18,7 @@ import numpy as np
 from aerial_drake.control.baselines.params import BASELINE_TYPES
 from aerial_drake.robots.models import AerialManipulator
 from aerial_drake.simulation.reference_pose import reference_configuration
-from aerial_drake.trajectories.paper import evaluate_reference
+from aerial_drake.trajectories.kinds import evaluate_reference
 
 # The scenario argument is a :class:`aerial_drake.simulation.scenarios.Scenario`; it is not
 # imported here because the scenarios import this module to check ``controller.type``.

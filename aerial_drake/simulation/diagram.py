@@ -331,7 +331,7 @@ def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: 
 
 #: The closed loop's outputs logged at every sample. The references are not among them: they
 #: are functions of time alone, recomputed after the run from the sample times by the same
-#: compiled code (:func:`aerial_drake.trajectories.paper.sample_reference`, equal to the last
+#: compiled code (:func:`aerial_drake.trajectories.kinds.sample_reference`, equal to the last
 #: bit), so nothing evaluates them in the loop but the controller.
 LOGGED_PORTS = ("plant_state", "command", "applied_command", "diagnostics", "rotor_drive_torque")
 

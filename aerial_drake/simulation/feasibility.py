@@ -6,7 +6,7 @@ ScenarioError naming the time, the cause and the fields to change.
 Sampling (docs/control.md, "Checks before a run"):
 
 - thrust, reach and smoothness every :data:`SAMPLE_PERIOD` = 10 ms, vectorised through
-  :func:`~aerial_drake.trajectories.paper.sample_reference` (any reference kind). The paper's
+  :func:`~aerial_drake.trajectories.kinds.sample_reference` (any reference kind). The paper's
   fastest terms turn at 3 rad/s, so a sampled peak of |f_d| is within (3 x 0.01)^2 / 8 = 1e-4
   of the true one, and the worst sample is then refined at 0.5 ms; a discontinuity is bisected
   down to microseconds (:mod:`.continuity`);
@@ -36,7 +36,7 @@ from aerial_drake.simulation.continuity import find_discontinuity
 from aerial_drake.simulation.diagram import input_limits
 from aerial_drake.simulation.reference_pose import mass_and_gravity, realising_targets
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
-from aerial_drake.trajectories.paper import sample_reference
+from aerial_drake.trajectories.kinds import sample_reference
 from aerial_drake.trajectories.reference import ReferenceSample
 
 #: Period of the reference samples for thrust, reach and smoothness (s).

@@ -11,7 +11,7 @@ import numpy as np
 from aerial_drake.control.law import desired_attitude, desired_force
 from aerial_drake.dynamics.equilibrium import solve_configuration
 from aerial_drake.robots.models import AerialManipulator
-from aerial_drake.trajectories.paper import evaluate_reference
+from aerial_drake.trajectories.kinds import evaluate_reference
 from aerial_drake.trajectories.reference import ReferenceSample
 
 

@@ -48,7 +48,8 @@ from aerial_drake.simulation.perturbations import start_perturbations
 from aerial_drake.simulation.reference_pose import reference_configuration
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
 from aerial_drake.simulation.scenarios.checks import REALTIME, estimated_log_mb, number
-from aerial_drake.trajectories.paper import compile_reference, sample_reference
+from aerial_drake.trajectories.kinds import sample_reference
+from aerial_drake.trajectories.paper import compile_reference
 
 #: Diagnostics entries that do not depend on the task's size (diagnostics_layout(0)).
 _BASE_DIAGNOSTICS = sum(size for _, size in diagnostics_layout(0))

@@ -2,20 +2,15 @@
 
 import copy
 
-import numpy as np
 from pydrake.systems.framework import BasicVector, Context, Diagram, DiagramBuilder, LeafSystem
 from pydrake.systems.primitives import Demultiplexer
 
-from aerial_drake.trajectories.paper import (
-    _N_CONSTANTS,
-    TrajectoryParams,
-    _fill_reference,
-    constants,
-)
+from aerial_drake.trajectories.base import ReferenceSource
+from aerial_drake.trajectories.kinds import reference_of
+from aerial_drake.trajectories.params import TrajectoryParams
 from aerial_drake.trajectories.reference import (
     COM_REFERENCE_SIZE,
     HEADING_REFERENCE_SIZE,
-    packed_reference_size,
     task_reference_size,
 )
 
@@ -26,18 +21,19 @@ class _PackedReference(LeafSystem):
     """The concatenation [com, task, heading] at the context time: one output, so one
     Python call per time; :class:`ReferenceGenerator` splits it in C++."""
 
-    def __init__(self, constants: np.ndarray, size: int):
+    def __init__(self, source: ReferenceSource):
         super().__init__()
-        self._constants = constants
-        self.DeclareVectorOutputPort("references", size, self._calc,
+        self._fill = source.fill
+        self.DeclareVectorOutputPort("references", source.size, self._calc,
                                      prerequisites_of_calc={self.time_ticket()})
 
     def _calc(self, context: Context, output: BasicVector) -> None:
-        _fill_reference(self._constants, context.get_time(), output.get_mutable_value())
+        self._fill(context.get_time(), output.get_mutable_value())
 
 
 class ReferenceGenerator(Diagram):
-    """The reference trajectory (28)-(33) as a Drake source: no state, no inputs.
+    """The reference trajectory of any kind (:mod:`aerial_drake.trajectories.kinds`; the
+    paper's (28)-(33) by default) as a Drake source: no state, no inputs.
 
     Output ports (functions of the context's time only; layouts in
     :mod:`aerial_drake.trajectories.reference`): ``com_reference`` (15), ``task_reference``
@@ -57,11 +53,11 @@ class ReferenceGenerator(Diagram):
 
     def __init__(self, params: TrajectoryParams, joint_defaults=None):
         super().__init__()
-        k = constants(params, joint_defaults)
+        source = reference_of(params, joint_defaults)
         self._params = copy.deepcopy(params)
-        self.n_joints = k.size - _N_CONSTANTS
+        self.n_joints = source.n_joints
         builder = DiagramBuilder()
-        packed = builder.AddSystem(_PackedReference(k, packed_reference_size(self.n_joints)))
+        packed = builder.AddSystem(_PackedReference(source))
         packed.set_name("packed_reference")
         split = builder.AddSystem(Demultiplexer(
             [COM_REFERENCE_SIZE, task_reference_size(self.n_joints), HEADING_REFERENCE_SIZE]))

@@ -28,113 +28,25 @@ Do not add ``from __future__ import annotations`` here: Drake's ``yaml_load_type
 real (non-string) field types of :class:`TrajectoryParams`.
 """
 
-import dataclasses
 import math
 import typing
 
 import numba
 import numpy as np
 
+from aerial_drake.trajectories.base import ReferenceSource
+from aerial_drake.trajectories.params import TrajectoryParams
 from aerial_drake.trajectories.reference import (
     ReferenceSample,
     packed_reference_size,
     packed_slices,
 )
 
-__all__ = ["TrajectoryParams", "constants", "evaluate_reference", "sample_reference",
-           "compile_reference"]
+__all__ = ["TrajectoryParams", "PaperReference", "constants", "joint_targets",
+           "evaluate_reference", "sample_reference", "compile_reference"]
 
 
-@dataclasses.dataclass
-class TrajectoryParams:
-    """Constants of the reference trajectory (28)-(33); defaults are the paper's values.
-
-    Loadable by ``pydrake.common.yaml.yaml_load_typed`` (a misspelt key is an error).
-    Call :meth:`validate` before use (:class:`ReferenceGenerator` and the pure functions do).
-    """
-
-    # Centre of the basic motion, World [x, y, z] (m).
-    center: typing.List[float] = dataclasses.field(default_factory=lambda: [0.6, 0.0, 1.3])
-    # Amplitude A_b of the basic motion (m).
-    basic_amplitude: float = 0.5
-    # Angular frequency w_b of the basic motion (rad/s).
-    basic_frequency: float = 0.5
-    # Climb rate c of the basic motion's z term, scaled by A_b (1/s): z gains A_b c t.
-    basic_climb_rate: float = 0.045
-    # Amplitude A_a of the agile motion (m).
-    agile_amplitude: float = 0.1
-    # Angular frequency w_a of the agile motion (rad/s).
-    agile_frequency: float = 3.0
-    # Amplitudes [a1, a2, a3] of the orientation angles phi1, phi2, phi3 of (31) (rad).
-    orientation_amplitudes: typing.List[float] = dataclasses.field(
-        default_factory=lambda: [0.5, 0.5, 0.5]
-    )
-    # Angular frequency w_o of the orientation angles (rad/s).
-    orientation_frequency: float = 3.0
-    # Desired angles of the task's joint components, in task order (rad): [q3d] for the
-    # paper's task (30). Empty: each at the robot's nominal posture.
-    joint_targets: typing.List[float] = dataclasses.field(default_factory=list)
-    # Initial helicopter heading phi4_0 (rad).
-    heading_initial: float = 0.0
-    # Heading rate w_h, phi4 = phi4_0 + w_h t (rad/s); either sign.
-    heading_rate: float = 0.5
-    # Offset r_o from x_c to the desired CoM, rotated by R3(phi4), [x, y, z] (m).
-    com_offset: typing.List[float] = dataclasses.field(default_factory=lambda: [-0.3, 0.0, 0.6])
-
-    def validate(self) -> None:
-        """Raises ValueError naming every bad field and how to fix it."""
-        errors = []
-        for name, meaning in (
-            ("center", "[x, y, z] in m"),
-            ("orientation_amplitudes", "[a1, a2, a3] in rad"),
-            ("com_offset", "[x, y, z] in m"),
-        ):
-            value = getattr(self, name)
-            try:
-                length = len(value)
-            except TypeError:
-                length = None
-            if length != 3:
-                errors.append(
-                    f"'{name}' must be a list of 3 floats {meaning}, got {value!r}: "
-                    "give exactly three entries"
-                )
-                continue
-            if not all(_is_finite_number(x) for x in value):
-                errors.append(f"'{name}' must hold finite numbers, got {value!r}")
-            elif name == "orientation_amplitudes" and any(x < 0 for x in value):
-                errors.append(
-                    f"'{name}' must be >= 0, got {value!r}: flip the sign through the "
-                    "angle's phase instead (an amplitude is a magnitude)"
-                )
-        for name in (
-            "basic_amplitude",
-            "basic_frequency",
-            "basic_climb_rate",
-            "agile_amplitude",
-            "agile_frequency",
-            "orientation_frequency",
-            "heading_initial",
-            "heading_rate",
-        ):
-            value = getattr(self, name)
-            if not _is_finite_number(value):
-                errors.append(f"'{name}' must be a finite float, got {value!r}")
-            elif name.endswith(("_amplitude", "_frequency")) and value < 0:
-                errors.append(f"'{name}' must be >= 0, got {value!r}: use its magnitude")
-        if not all(_is_finite_number(x) for x in self.joint_targets):
-            errors.append(f"'joint_targets' must hold finite angles (rad), got "
-                          f"{self.joint_targets!r}")
-        if errors:
-            raise ValueError("Invalid TrajectoryParams: " + "; ".join(errors) + ".")
-
-
-def _is_finite_number(x) -> bool:
-    return isinstance(x, (int, float, np.floating, np.integer)) and math.isfinite(x)
-
-
-
-def _joint_targets(params: TrajectoryParams, defaults) -> np.ndarray:
+def joint_targets(params: TrajectoryParams, defaults=None) -> np.ndarray:
     """The desired joint angles: the scenario's, else ``defaults`` (the robot's nominal
     posture at the task's joints), else the paper's one q3d = 0."""
     if params.joint_targets:
@@ -146,13 +58,17 @@ def constants(params: TrajectoryParams, joint_defaults=None) -> np.ndarray:
     """The constants array the compiled formulas read: :class:`_Constants` then the joint
     targets (see :func:`_joint_targets` for ``joint_defaults``)."""
     params.validate()
+    if params.kind != "paper":
+        raise ValueError(f"trajectory kind '{params.kind}' is not the paper's (28)-(33): use "
+                         "aerial_drake.trajectories.kinds.reference_of for any kind")
     return np.concatenate([_Constants.from_params(params).as_array(),
-                           _joint_targets(params, joint_defaults)])
+                           joint_targets(params, joint_defaults)])
 
 
 def evaluate_reference(params: TrajectoryParams, t: float, joint_defaults=None
                        ) -> ReferenceSample:
-    """The reference and its analytic derivatives at time t (s)."""
+    """The paper kind's reference and its analytic derivatives at time t (s) (any kind:
+    :func:`aerial_drake.trajectories.kinds.evaluate_reference`)."""
     k = constants(params, joint_defaults)
     n_joints = k.size - _N_CONSTANTS
     packed = np.empty(packed_reference_size(n_joints))
@@ -177,6 +93,27 @@ def sample_reference(params: TrajectoryParams, times: np.ndarray, joint_defaults
     _fill_reference_over_time(k, times, packed)
     com, task, heading = packed_slices(n_joints)
     return ReferenceSample.from_vectors(packed[:, com], packed[:, task], packed[:, heading])
+
+
+class PaperReference(ReferenceSource):
+    """``kind: paper``: (28)-(33) by the compiled formulas."""
+
+    kind = "paper"
+
+    def __init__(self, params: TrajectoryParams, joint_defaults=None) -> None:
+        self.constants = constants(params, joint_defaults)
+        super().__init__(self.constants.size - _N_CONSTANTS)
+
+    def fill(self, t: float, out: np.ndarray) -> None:
+        _fill_reference(self.constants, float(t), out)
+
+    def packed(self, times: np.ndarray) -> np.ndarray:
+        times = np.asarray(times, dtype=float)
+        if times.ndim != 1:
+            raise ValueError(f"times must be a 1-D array, got shape {times.shape}")
+        out = np.empty((times.size, self.size))
+        _fill_reference_over_time(self.constants, times, out)
+        return out
 
 
 class _Constants(typing.NamedTuple):

@@ -12,7 +12,7 @@ animation in one file; opens offline from ``file://``).
 What :class:`TrackingOverlay` draws, under ``/drake/overlays`` (``OVERLAY_PATHS``):
 
 - the desired end-effector path x_ed(t) (magenta line) and the desired CoM path x_d(t) (cyan
-  line), sampled once from :func:`aerial_drake.trajectories.paper.sample_reference` over the run;
+  line), sampled once from :func:`aerial_drake.trajectories.kinds.sample_reference` over the run;
 - the desired end-effector frame (p_ed, R_ed) as a long, thin, translucent triad and the actual
   one (the plant's frame E) as a short, thick, opaque triad (x red, y green, z blue);
 - the desired CoM x_d (translucent cyan sphere) and the actual CoM (small navy sphere); the CoM
@@ -65,7 +65,7 @@ from aerial_drake.robots.extent import vehicle_extent
 from aerial_drake.robots.models import AerialManipulator
 from aerial_drake.simulation.diagram import ClosedLoop
 from aerial_drake.simulation.scenarios import Scenario
-from aerial_drake.trajectories.paper import sample_reference
+from aerial_drake.trajectories.kinds import sample_reference
 from aerial_drake.trajectories.reference import (
     COM_REFERENCE_SIZE,
     HEADING_REFERENCE_SIZE,

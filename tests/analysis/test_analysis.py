@@ -16,7 +16,8 @@ from aerial_drake.dynamics.equilibrium import UnreachablePose
 from aerial_drake.robots.description import shipped_robots
 from aerial_drake.robots.models import make_plant
 from aerial_drake.simulation.scenarios import load_scenario
-from aerial_drake.trajectories.paper import TrajectoryParams, evaluate_reference
+from aerial_drake.trajectories.kinds import evaluate_reference
+from aerial_drake.trajectories.params import TrajectoryParams
 
 
 @pytest.fixture(scope="module")

@@ -19,7 +19,7 @@ from aerial_drake.simulation.controllers import body_offset_in_heading_frame
 from aerial_drake.simulation.metrics import saturated_after_key
 from aerial_drake.simulation.runner import reference_configuration, run_scenario
 from aerial_drake.simulation.scenarios import ControllerConfig, InitialCondition, load_scenario
-from aerial_drake.trajectories.paper import evaluate_reference
+from aerial_drake.trajectories.kinds import evaluate_reference
 
 KINDS = ("uncoupled", "static_compensation")
 N_TASK = 7  # the paper's task: end-effector pose and q3

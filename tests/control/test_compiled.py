@@ -18,7 +18,7 @@ from aerial_drake.robots.models import make_plant
 from aerial_drake.simulation.diagram import build_closed_loop
 from aerial_drake.simulation.runner import reference_configuration
 from aerial_drake.simulation.scenarios import load_scenario
-from aerial_drake.trajectories.paper import evaluate_reference
+from aerial_drake.trajectories.kinds import evaluate_reference
 from chain_plant import make_random_chain
 from states import at_state, random_states, rel
 

@@ -41,7 +41,7 @@ from aerial_drake.robots.description import (  # noqa: E402
 from aerial_drake.robots.models import make_plant  # noqa: E402
 from aerial_drake.simulation.runner import reference_configuration  # noqa: E402
 from aerial_drake.simulation.scenarios import load_scenario  # noqa: E402
-from aerial_drake.trajectories.paper import evaluate_reference  # noqa: E402
+from aerial_drake.trajectories.kinds import evaluate_reference  # noqa: E402
 from paper_oracles import (  # noqa: E402
     ChristoffelFromMassMatrix,
     PinocchioModel,

@@ -13,7 +13,7 @@ from aerial_drake.robots.models import make_plant
 from aerial_drake.simulation.reference_pose import reference_configuration
 from aerial_drake.simulation.runner import run_scenario
 from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
-from aerial_drake.trajectories.paper import evaluate_reference
+from aerial_drake.trajectories.kinds import evaluate_reference
 from own_robot import write_robot
 
 

@@ -14,7 +14,7 @@ from aerial_drake.simulation.continuity import find_discontinuity
 from aerial_drake.simulation.reference_pose import realising_targets
 from aerial_drake.simulation.runner import run_scenario
 from aerial_drake.simulation.scenarios import ScenarioError, load_scenario, shipped_scenarios
-from aerial_drake.trajectories.paper import sample_reference
+from aerial_drake.trajectories.kinds import sample_reference
 
 
 def named_time(message: str) -> float:

@@ -92,7 +92,7 @@ def test_assumption_2_vanishing_thrust():
     from aerial_drake.control.controller import make_controller
     from aerial_drake.robots.models import make_plant
     from aerial_drake.simulation.runner import reference_configuration
-    from aerial_drake.trajectories.paper import evaluate_reference
+    from aerial_drake.trajectories.kinds import evaluate_reference
 
     s = load_scenario("nominal")
     model = make_plant("rigid")

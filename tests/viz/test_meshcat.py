@@ -26,7 +26,7 @@ from aerial_drake.control.law import diagnostics_slices
 from aerial_drake.robots.models import make_plant
 from aerial_drake.simulation.runner import run_scenario
 from aerial_drake.simulation.scenarios import Disturbance, load_scenario, shipped_scenarios
-from aerial_drake.trajectories.paper import sample_reference
+from aerial_drake.trajectories.kinds import sample_reference
 from aerial_drake.viz import meshcat_view as dut
 from aerial_drake.viz.screenshot import (
     colourful_fraction,

@@ -14,6 +14,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 from pydrake.common.yaml import yaml_dump, yaml_load_typed
 from pydrake.systems.analysis import SimulatorConfig
 
@@ -46,7 +47,8 @@ from aerial_drake.simulation.scenarios.perturbations import (
     check_perturbations,
 )
 from aerial_drake.simulation.scenarios.reading import read_scenario_file
-from aerial_drake.trajectories.paper import TrajectoryParams
+from aerial_drake.simulation.scenarios.trajectory import check_trajectory, resolve_python_path
+from aerial_drake.trajectories.params import TrajectoryParams
 
 DISTURBANCE_TARGETS = ("helicopter", "end_effector")
 
@@ -167,7 +169,9 @@ class Scenario:
         """Check every value (type, finiteness, range, consistency: :mod:`.checks`); raise
         ScenarioError naming the field, the value, the allowed range and the fix. Returns
         self."""
-        check_values(self, robot_facts(self), DISTURBANCE_TARGETS)
+        facts = robot_facts(self)
+        check_values(self, facts, DISTURBANCE_TARGETS)
+        check_trajectory(self, np.array(facts.joint_nominal))
         self._validate_controller()
         check_perturbations(self)
         return self
@@ -239,7 +243,8 @@ def robot_facts(scenario: Scenario) -> RobotFacts:
         _FACTS[key] = RobotFacts(n=model.n, n_task_joints=model.task.n_joints,
                                  variants=description.variant_names(),
                                  rotor_variants=rotor_variants,
-                                 thrust=model.thrust_limits())
+                                 thrust=model.thrust_limits(),
+                                 joint_nominal=tuple(model.task_joint_nominal()))
     return _FACTS[key]
 
 
@@ -351,7 +356,7 @@ def load_scenario(name_or_path: str | Path, *, overrides: dict | None = None) ->
                             where.split(" ")[0] if where else None) from None
     if overrides:
         scenario = apply_overrides(scenario, overrides)
-    scenario = _resolve_robot(scenario, path)
+    scenario = resolve_python_path(_resolve_robot(scenario, path), path)
     try:
         return scenario.validate()
     except ScenarioError as err:

@@ -191,6 +191,7 @@ class RobotFacts:
     variants: tuple[str, ...]
     rotor_variants: tuple[str, ...]  # the variants with rotor joints
     thrust: tuple[float, float]  # the robot's thrust range (N)
+    joint_nominal: tuple[float, ...] = ()  # the task's joint components at the nominal posture
 
 
 def check_values(s: Any, robot: RobotFacts, targets: tuple[str, ...]) -> None:

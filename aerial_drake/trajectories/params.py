@@ -1,0 +1,296 @@
+"""The scenario's ``trajectory:`` section: which reference kind flies and its numbers
+(:class:`TrajectoryParams`, loadable by ``pydrake.common.yaml.yaml_load_typed``).
+
+Kinds (``kind``; docs/trajectories.md):
+
+- ``paper`` (default): the paper's (28)-(33), constants in the top-level fields
+  (:mod:`aerial_drake.trajectories.paper`);
+- ``hover``: constant CoM, heading and task (:class:`HoverParams`);
+- ``waypoints``: end-effector poses (and task joint angles) at given times, interpolated
+  smoothly enough for the law (:class:`WaypointsParams`, :mod:`.waypoints`);
+- ``python``: a function of the user's, or Drake trajectories (:class:`PythonParams`,
+  :mod:`.python_kind`).
+
+``joint_targets`` (the task's joint components' angles) and ``com_offset`` (r_o of (33)) are
+shared: the paper and hover kinds and waypoints' ``com: offset`` rule read them.
+
+Do not add ``from __future__ import annotations`` here: Drake's ``yaml_load_typed`` needs the
+real (non-string) field types.
+"""
+
+import dataclasses
+import math
+import typing
+
+import numpy as np
+
+__all__ = ["KINDS", "TrajectoryParams", "HoverParams", "Waypoint", "WaypointsParams",
+           "PythonParams", "COM_RULES", "HEADING_RULES"]
+
+#: The reference kinds a scenario's ``trajectory.kind`` may name.
+KINDS = ("paper", "hover", "waypoints", "python")
+#: How the waypoints kind finds the CoM: rule (33) from the end-effector path, or its own
+#: waypoints.
+COM_RULES = ("offset", "waypoints")
+#: How the waypoints kind finds the heading.
+HEADING_RULES = ("constant", "given", "along_path")
+
+
+def _is_finite_number(x) -> bool:
+    return (isinstance(x, (int, float, np.floating, np.integer)) and not isinstance(x, bool)
+            and math.isfinite(x))
+
+
+def _vector_error(name: str, value, size: int, meaning: str) -> str | None:
+    try:
+        length = len(value)
+    except TypeError:
+        length = None
+    if length != size:
+        return f"'{name}' must be a list of {size} floats {meaning}, got {value!r}"
+    if not all(_is_finite_number(x) for x in value):
+        return f"'{name}' must hold finite numbers ({meaning}), got {value!r}"
+    return None
+
+
+@dataclasses.dataclass
+class HoverParams:
+    """``kind: hover``: everything constant (the CoM at rest, the arm holding its task)."""
+
+    # The end effector's position, World [x, y, z] (m).
+    ee_position: typing.List[float] = dataclasses.field(
+        default_factory=lambda: [0.6, 0.0, 0.8])
+    # Its orientation R_ed = R1(a) R2(b) R3(c) as in (29): [a, b, c] (rad).
+    ee_rpy: typing.List[float] = dataclasses.field(default_factory=lambda: [0.0, 0.0, 0.0])
+    # The vehicle's heading phi4, b1d = [cos phi4, sin phi4, 0] (rad).
+    heading: float = 0.0
+    # The CoM, World [x, y, z] (m); empty: rule (33), ee_position + R3(heading) com_offset.
+    com: typing.List[float] = dataclasses.field(default_factory=list)
+
+    def errors(self, prefix: str = "hover.") -> list[str]:
+        found = [_vector_error(prefix + "ee_position", self.ee_position, 3, "[x, y, z] in m"),
+                 _vector_error(prefix + "ee_rpy", self.ee_rpy, 3, "[a, b, c] in rad")]
+        if self.com:
+            found.append(_vector_error(prefix + "com", self.com, 3, "[x, y, z] in m"))
+        if not _is_finite_number(self.heading):
+            found.append(f"'{prefix}heading' must be a finite angle (rad), got "
+                         f"{self.heading!r}")
+        return [e for e in found if e]
+
+
+@dataclasses.dataclass
+class Waypoint:
+    """One waypoint: where the end effector is at ``time``, and optionally how fast."""
+
+    # Time (s), increasing along the list.
+    time: float = 0.0
+    # End-effector position, World [x, y, z] (m).
+    ee_position: typing.List[float] = dataclasses.field(
+        default_factory=lambda: [0.6, 0.0, 0.8])
+    # End-effector orientation R_ed = R1(a) R2(b) R3(c) as in (29): [a, b, c] (rad).
+    ee_rpy: typing.List[float] = dataclasses.field(default_factory=lambda: [0.0, 0.0, 0.0])
+    # The task's joint components' angles (rad); empty: joint_targets (or the nominal).
+    joints: typing.List[float] = dataclasses.field(default_factory=list)
+    # The CoM, World [x, y, z] (m): required with ``com: waypoints``, else empty.
+    com: typing.List[float] = dataclasses.field(default_factory=list)
+    # The heading phi4 (rad): required with ``heading: given``, else .nan.
+    heading: float = math.nan
+    # Velocity through the waypoint, World (m/s); empty: at rest there.
+    ee_velocity: typing.List[float] = dataclasses.field(default_factory=list)
+    # Angular velocity of the end effector through the waypoint, World (rad/s); empty: 0.
+    ee_angular_velocity: typing.List[float] = dataclasses.field(default_factory=list)
+
+
+@dataclasses.dataclass
+class WaypointsParams:
+    """``kind: waypoints``: end-effector poses at given times (docs/trajectories.md)."""
+
+    points: typing.List[Waypoint] = dataclasses.field(default_factory=list)
+    # "offset": the CoM follows the end-effector path at com_offset rotated with the heading
+    # (the paper's rule (33)); "waypoints": each waypoint's ``com``.
+    com: str = "offset"
+    # "constant" (heading_angle), "given" (each waypoint's ``heading``), "along_path" (each
+    # waypoint faces the horizontal direction to the next).
+    heading: str = "constant"
+    # The heading of ``heading: constant`` (rad).
+    heading_angle: float = 0.0
+
+    def errors(self, n_joints: int | None = None, prefix: str = "waypoints.") -> list[str]:
+        found: list[str | None] = []
+        if self.com not in COM_RULES:
+            found.append(f"'{prefix}com' must be one of {COM_RULES}, got {self.com!r}")
+        if self.heading not in HEADING_RULES:
+            found.append(f"'{prefix}heading' must be one of {HEADING_RULES}, got "
+                         f"{self.heading!r}")
+        if not _is_finite_number(self.heading_angle):
+            found.append(f"'{prefix}heading_angle' must be a finite angle (rad), got "
+                         f"{self.heading_angle!r}")
+        if len(self.points) < 2:
+            found.append(f"'{prefix}points' needs at least two waypoints, got "
+                         f"{len(self.points)}: for a constant reference use kind: hover")
+        previous = -math.inf
+        for i, w in enumerate(self.points):
+            where = f"{prefix}points[{i}]."
+            if not _is_finite_number(w.time) or w.time < 0:
+                found.append(f"'{where}time' must be a finite time >= 0 (s), got {w.time!r}")
+            elif not w.time > previous:
+                found.append(f"'{where}time' = {w.time!r} must be later than the waypoint "
+                             f"before ({previous!r} s): list waypoints in time order")
+            else:
+                previous = w.time
+            found.append(_vector_error(where + "ee_position", w.ee_position, 3,
+                                       "[x, y, z] in m"))
+            found.append(_vector_error(where + "ee_rpy", w.ee_rpy, 3, "[a, b, c] in rad"))
+            if w.joints and n_joints is not None:
+                found.append(_vector_error(where + "joints", w.joints, n_joints,
+                                           "one angle per joint component of the task (rad)"))
+            elif w.joints and not all(_is_finite_number(x) for x in w.joints):
+                found.append(f"'{where}joints' must hold finite angles (rad), got {w.joints!r}")
+            if self.com == "waypoints":
+                found.append(_vector_error(where + "com", w.com, 3, "[x, y, z] in m (com: "
+                                           "waypoints needs it at every waypoint)"))
+            elif w.com:
+                found.append(f"'{where}com' is set but the CoM follows rule (33) (com: "
+                             "offset): set com: waypoints, or remove it")
+            if self.heading == "given" and not _is_finite_number(w.heading):
+                found.append(f"'{where}heading' must be a finite angle (rad) with heading: "
+                             f"given, got {w.heading!r}")
+            elif self.heading != "given" and not math.isnan(w.heading):
+                found.append(f"'{where}heading' is set but heading is "
+                             f"'{self.heading}': set heading: given, or remove it")
+            for name in ("ee_velocity", "ee_angular_velocity"):
+                value = getattr(w, name)
+                if value:
+                    found.append(_vector_error(where + name, value, 3, "World, per s"))
+        if self.points and any(
+                w.joints for w in self.points) and not all(w.joints for w in self.points):
+            found.append(f"'{prefix}points[*].joints' is set at some waypoints only: give it "
+                         "at every waypoint, or at none (joint_targets holds them)")
+        for end in (0, len(self.points) - 1) if self.points else ():
+            w = self.points[end]
+            for name in ("ee_velocity", "ee_angular_velocity"):
+                value = getattr(w, name)
+                if value and _vector_error("", value, 3, "") is None and any(value):
+                    found.append(f"'{prefix}points[{end}].{name}' = {value!r} must be zero: the "
+                                 "reference holds still before the first and after the last "
+                                 "waypoint, so a velocity there would jump")
+        return [e for e in found if e]
+
+
+@dataclasses.dataclass
+class PythonParams:
+    """``kind: python``: a reference of the user's (docs/trajectories.md)."""
+
+    # "module:name": a function f(t) -> ReferenceSample, or a dict of Drake trajectories
+    # (keys com, ee_position, ee_rotation_vector, heading, joints), or a function of no
+    # arguments returning either.
+    function: str = ""
+    # A folder added to the import path first (relative to the scenario file); empty: none.
+    path: str = ""
+
+    def errors(self, prefix: str = "python.") -> list[str]:
+        if not isinstance(self.function, str) or self.function.count(":") != 1 or not all(
+                part.strip() for part in self.function.split(":")):
+            return [f"'{prefix}function' must be 'module:name' (e.g. 'my_paths:inspection'), "
+                    f"got {self.function!r}"]
+        return []
+
+
+@dataclasses.dataclass
+class TrajectoryParams:
+    """The ``trajectory:`` section: the kind and its numbers; the top-level constants are the
+    paper kind's (28)-(33) (defaults: the paper's values).
+
+    Loadable by ``pydrake.common.yaml.yaml_load_typed`` (a misspelt key is an error).
+    Call :meth:`validate` before use (:class:`ReferenceGenerator` and the pure functions do).
+    """
+
+    # The reference kind: one of KINDS (docs/trajectories.md).
+    kind: str = "paper"
+    # Centre of the basic motion, World [x, y, z] (m).
+    center: typing.List[float] = dataclasses.field(default_factory=lambda: [0.6, 0.0, 1.3])
+    # Amplitude A_b of the basic motion (m).
+    basic_amplitude: float = 0.5
+    # Angular frequency w_b of the basic motion (rad/s).
+    basic_frequency: float = 0.5
+    # Climb rate c of the basic motion's z term, scaled by A_b (1/s): z gains A_b c t.
+    basic_climb_rate: float = 0.045
+    # Amplitude A_a of the agile motion (m).
+    agile_amplitude: float = 0.1
+    # Angular frequency w_a of the agile motion (rad/s).
+    agile_frequency: float = 3.0
+    # Amplitudes [a1, a2, a3] of the orientation angles phi1, phi2, phi3 of (31) (rad).
+    orientation_amplitudes: typing.List[float] = dataclasses.field(
+        default_factory=lambda: [0.5, 0.5, 0.5]
+    )
+    # Angular frequency w_o of the orientation angles (rad/s).
+    orientation_frequency: float = 3.0
+    # Desired angles of the task's joint components, in task order (rad): [q3d] for the
+    # paper's task (30). Empty: each at the robot's nominal posture.
+    joint_targets: typing.List[float] = dataclasses.field(default_factory=list)
+    # Initial helicopter heading phi4_0 (rad).
+    heading_initial: float = 0.0
+    # Heading rate w_h, phi4 = phi4_0 + w_h t (rad/s); either sign.
+    heading_rate: float = 0.5
+    # Offset r_o from x_c to the desired CoM, rotated by R3(phi4), [x, y, z] (m).
+    com_offset: typing.List[float] = dataclasses.field(default_factory=lambda: [-0.3, 0.0, 0.6])
+
+    # The other kinds' sections (read only by their kind).
+    hover: HoverParams = dataclasses.field(default_factory=HoverParams)
+    waypoints: WaypointsParams = dataclasses.field(default_factory=WaypointsParams)
+    python: PythonParams = dataclasses.field(default_factory=PythonParams)
+
+    def validate(self) -> None:
+        """Raises ValueError naming every bad field and how to fix it."""
+        errors = []
+        if self.kind not in KINDS:
+            raise ValueError(f"Invalid TrajectoryParams: 'kind' must be one of {KINDS}, got "
+                             f"{self.kind!r}.")
+        section = {"hover": self.hover, "waypoints": self.waypoints,
+                   "python": self.python}.get(self.kind)
+        if section is not None:
+            errors += section.errors()
+        for name, meaning in (
+            ("center", "[x, y, z] in m"),
+            ("orientation_amplitudes", "[a1, a2, a3] in rad"),
+            ("com_offset", "[x, y, z] in m"),
+        ):
+            value = getattr(self, name)
+            try:
+                length = len(value)
+            except TypeError:
+                length = None
+            if length != 3:
+                errors.append(
+                    f"'{name}' must be a list of 3 floats {meaning}, got {value!r}: "
+                    "give exactly three entries"
+                )
+                continue
+            if not all(_is_finite_number(x) for x in value):
+                errors.append(f"'{name}' must hold finite numbers, got {value!r}")
+            elif name == "orientation_amplitudes" and any(x < 0 for x in value):
+                errors.append(
+                    f"'{name}' must be >= 0, got {value!r}: flip the sign through the "
+                    "angle's phase instead (an amplitude is a magnitude)"
+                )
+        for name in (
+            "basic_amplitude",
+            "basic_frequency",
+            "basic_climb_rate",
+            "agile_amplitude",
+            "agile_frequency",
+            "orientation_frequency",
+            "heading_initial",
+            "heading_rate",
+        ):
+            value = getattr(self, name)
+            if not _is_finite_number(value):
+                errors.append(f"'{name}' must be a finite float, got {value!r}")
+            elif name.endswith(("_amplitude", "_frequency")) and value < 0:
+                errors.append(f"'{name}' must be >= 0, got {value!r}: use its magnitude")
+        if not all(_is_finite_number(x) for x in self.joint_targets):
+            errors.append(f"'joint_targets' must hold finite angles (rad), got "
+                          f"{self.joint_targets!r}")
+        if errors:
+            raise ValueError("Invalid TrajectoryParams: " + "; ".join(errors) + ".")
+

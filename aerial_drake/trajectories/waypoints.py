@@ -1,0 +1,183 @@
+"""``kind: waypoints``: end-effector poses (and task joint angles) at given times, made smooth
+enough for the law (docs/trajectories.md).
+
+Constructions (all local: a waypoint changes only its two segments):
+
+- end-effector position, CoM waypoints, heading angle and joint components: piecewise
+  degree-9 Hermite polynomials (:mod:`.hermite`), matching at each waypoint the value, the
+  given velocity (zero: rest to rest) and zero acceleration, jerk and snap. So every one is C^4
+  (the law needs x_d in C^4 for the attitude feed-forward (13)-(16), the task in C^2 (17)-(20)).
+- CoM with ``com: offset``: the paper's rule (33), x_d = p_ed + R3(phi4) r_o, the end
+  effector's path at the fixed offset r_o (``trajectory.com_offset``) rotated with the heading:
+  C^4 because both terms are.
+- orientation: on each segment R(t) = R_i exp(hat(r(t))) with r(t) a quintic in the tangent
+  space at R_i (:mod:`.so3`) from r = 0 to log(R_i^T R_{i+1}), matching the waypoints' angular
+  velocities (zero: rest) and zero angular acceleration at both ends. The angular velocity
+  w = R J_r(r) r' and acceleration are continuous across waypoints (C^2 on SO(3)), unlike
+  slerp's, whose angular velocity jumps at each waypoint.
+- heading: ``constant`` (heading_angle), ``given`` (each waypoint's, interpolated as numbers:
+  write 3.3 rather than -2.98 to turn the short way from 3.0), or ``along_path`` (each waypoint
+  faces the horizontal direction to the next one, the last keeps the one before; a waypoint
+  less than 1 cm from the next horizontally keeps the previous heading), then unwrapped.
+
+Before the first waypoint and after the last the reference holds still (so their velocities
+must be zero, which :class:`~aerial_drake.trajectories.params.WaypointsParams` checks).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from aerial_drake.trajectories.base import ReferenceSource
+from aerial_drake.trajectories.heading import heading_reference, rotated_offset
+from aerial_drake.trajectories.hermite import PiecewiseHermite, hermite_segment
+from aerial_drake.trajectories.params import WaypointsParams
+from aerial_drake.trajectories.reference import (
+    COM_REFERENCE_SIZE,
+    TaskReferenceLayout,
+    task_reference_size,
+)
+from aerial_drake.trajectories.so3 import (
+    exp_so3,
+    log_so3,
+    rotation_vector_acceleration,
+    rotation_vector_rates,
+    rotation_vector_velocity,
+)
+
+__all__ = ["WaypointsReference", "paper_angles_rotation", "MAX_SEGMENT_ROTATION"]
+
+#: The largest rotation between two waypoints (rad): near pi the shortest way is ambiguous.
+MAX_SEGMENT_ROTATION = math.pi - 0.05
+#: Horizontal distances below this do not set a heading (``heading: along_path``) (m).
+ALONG_PATH_MIN_DISTANCE = 0.01
+_C4 = 5  # value and four derivatives
+_C2 = 3  # value and two derivatives
+
+
+def paper_angles_rotation(angles) -> np.ndarray:
+    """R = R1(a) R2(b) R3(c) (RotX, RotY, RotZ) of (29) for ``angles`` = [a, b, c] (rad)."""
+    a, b, c = (float(x) for x in angles)
+    ca, sa, cb, sb, cc, sc = math.cos(a), math.sin(a), math.cos(b), math.sin(b), \
+        math.cos(c), math.sin(c)
+    R1 = np.array([[1.0, 0.0, 0.0], [0.0, ca, -sa], [0.0, sa, ca]])
+    R2 = np.array([[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]])
+    R3 = np.array([[cc, -sc, 0.0], [sc, cc, 0.0], [0.0, 0.0, 1.0]])
+    return R1 @ R2 @ R3
+
+
+def _rest_to_rest(values: np.ndarray, velocities: np.ndarray | None = None) -> np.ndarray:
+    """Waypoint derivatives (N, 5, C) for :meth:`PiecewiseHermite.from_waypoints`: the
+    values, the velocities (zero if None), zero acceleration, jerk and snap."""
+    values = np.asarray(values, dtype=float).reshape(len(values), -1)
+    out = np.zeros((values.shape[0], _C4, values.shape[1]))
+    out[:, 0] = values
+    if velocities is not None:
+        out[:, 1] = velocities
+    return out
+
+
+class WaypointsReference(ReferenceSource):
+    """The reference through :class:`~aerial_drake.trajectories.params.WaypointsParams`
+    (module docstring). ``joint_targets``: the task's joint angles where the waypoints give
+    none; ``com_offset``: r_o of (33) for ``com: offset``."""
+
+    kind = "waypoints"
+
+    def __init__(self, params: WaypointsParams, joint_targets: np.ndarray,
+                 com_offset: np.ndarray) -> None:
+        errors = params.errors(len(joint_targets))
+        if errors:
+            raise ValueError("Invalid waypoints: " + "; ".join(errors) + ".")
+        points = params.points
+        super().__init__(len(joint_targets))
+        self.times = np.array([w.time for w in points], dtype=float)
+        positions = np.array([w.ee_position for w in points], dtype=float)
+        velocities = np.array([w.ee_velocity or [0.0, 0.0, 0.0] for w in points], dtype=float)
+        self._position = PiecewiseHermite.from_waypoints(
+            self.times, _rest_to_rest(positions, velocities))
+        self._heading = PiecewiseHermite.from_waypoints(
+            self.times, _rest_to_rest(self._headings(params, positions)))
+        self._com = None
+        if params.com == "waypoints":
+            self._com = PiecewiseHermite.from_waypoints(
+                self.times, _rest_to_rest(np.array([w.com for w in points], dtype=float)))
+        self._com_offset = np.asarray(com_offset, dtype=float)
+        self._joints = None
+        self._joint_targets = np.asarray(joint_targets, dtype=float)
+        if points[0].joints:
+            self._joints = PiecewiseHermite.from_waypoints(
+                self.times, _rest_to_rest(np.array([w.joints for w in points], dtype=float)))
+        self._bases, self._orientation = self._orientation_segments(points)
+        self._at = TaskReferenceLayout.of(self.n_joints)
+        self._task_end = COM_REFERENCE_SIZE + task_reference_size(self.n_joints)
+
+    @staticmethod
+    def _headings(params: WaypointsParams, positions: np.ndarray) -> np.ndarray:
+        n = positions.shape[0]
+        if params.heading == "constant":
+            return np.full(n, float(params.heading_angle))
+        if params.heading == "given":
+            return np.array([w.heading for w in params.points], dtype=float)
+        headings = np.full(n, math.nan)
+        for i in range(n - 1):
+            d = positions[i + 1, :2] - positions[i, :2]
+            if np.linalg.norm(d) >= ALONG_PATH_MIN_DISTANCE:
+                headings[i] = math.atan2(d[1], d[0])
+        known = headings[~np.isnan(headings)]
+        previous = float(known[0]) if known.size else float(params.heading_angle)
+        for i in range(n):  # a short step (and the last waypoint) keeps the heading before
+            if math.isnan(headings[i]):
+                headings[i] = previous
+            previous = headings[i]
+        return np.unwrap(headings)
+
+    def _orientation_segments(self, points) -> tuple[np.ndarray, PiecewiseHermite]:
+        """Per segment: its base R_i and the quintic r(tau) (module docstring)."""
+        rotations = [paper_angles_rotation(w.ee_rpy) for w in points]
+        omegas = [np.asarray(w.ee_angular_velocity or [0.0, 0.0, 0.0], dtype=float)
+                  for w in points]
+        coefficients = []
+        zero = np.zeros(3)
+        for i in range(len(points) - 1):
+            r_end = log_so3(rotations[i].T @ rotations[i + 1])
+            angle = float(np.linalg.norm(r_end))
+            if angle > MAX_SEGMENT_ROTATION:
+                raise ValueError(
+                    f"Invalid waypoints: the end effector turns by {math.degrees(angle):.1f} "
+                    f"deg between points[{i}] and points[{i + 1}] (t = {points[i].time:g} and "
+                    f"{points[i + 1].time:g} s), above {math.degrees(MAX_SEGMENT_ROTATION):.0f}"
+                    " deg where the shortest way is ambiguous: insert a waypoint between them")
+            # Body angular velocities: R^T w (the rotation vector lives in R_i's tangent space).
+            start_rate = rotations[i].T @ omegas[i]
+            end_rate = rotation_vector_velocity(r_end, rotations[i + 1].T @ omegas[i + 1])
+            end_acceleration = rotation_vector_acceleration(r_end, end_rate, zero)
+            coefficients.append(hermite_segment(
+                points[i + 1].time - points[i].time,
+                np.array([zero, start_rate, zero]),
+                np.array([r_end, end_rate, end_acceleration])))
+        return np.array(rotations[:-1]), PiecewiseHermite(self.times, np.array(coefficients))
+
+    def fill(self, t: float, out: np.ndarray) -> None:
+        P = self._position.evaluate(t, _C4)
+        phi = self._heading.evaluate(t, _C4)[:, 0]
+        com = self._com.evaluate(t, _C4) if self._com is not None else \
+            P + rotated_offset(phi, self._com_offset)
+        out[:COM_REFERENCE_SIZE] = com.reshape(-1)
+        task = out[COM_REFERENCE_SIZE:self._task_end]
+        at = self._at
+        task[at.p], task[at.v], task[at.a] = P[0], P[1], P[2]
+        i, _ = self._orientation.segment(t)
+        r = self._orientation.evaluate(t, _C2)
+        R = self._bases[i] @ exp_so3(r[0])
+        omega, domega = rotation_vector_rates(r[0], r[1], r[2])
+        task[at.R] = R.reshape(-1)
+        task[at.w], task[at.dw] = R @ omega, R @ domega  # World: w = R omega, dw = R domega
+        if self._joints is not None:
+            q = self._joints.evaluate(t, _C2)
+            task[at.q], task[at.q_dot], task[at.q_ddot] = q[0], q[1], q[2]
+        else:
+            task[at.q], task[at.q_dot], task[at.q_ddot] = self._joint_targets, 0.0, 0.0
+        out[self._task_end:] = heading_reference(phi).reshape(-1)
