@@ -246,10 +246,12 @@ class TrajectoryParams:
         if self.kind not in KINDS:
             raise ValueError(f"Invalid TrajectoryParams: 'kind' must be one of {KINDS}, got "
                              f"{self.kind!r}.")
-        section = {"hover": self.hover, "waypoints": self.waypoints,
-                   "python": self.python}.get(self.kind)
-        if section is not None:
-            errors += section.errors()
+        if self.kind == "hover":
+            errors += self.hover.errors()
+        elif self.kind == "waypoints":
+            errors += self.waypoints.errors()
+        elif self.kind == "python":
+            errors += self.python.errors()
         for name, meaning in (
             ("center", "[x, y, z] in m"),
             ("orientation_amplitudes", "[a1, a2, a3] in rad"),

@@ -161,6 +161,7 @@ class DrakeTrajectoriesReference(ReferenceSource):
     def fill(self, t: float, out: np.ndarray) -> None:
         com = self._derivatives("com", t, 5)
         p = self._derivatives("ee_position", t, 3)
+        assert com is not None and p is not None  # required keys, checked in __init__
         r = self._derivatives("ee_rotation_vector", t, 3)
         phi = self._derivatives("heading", t, 3)
         q = self._derivatives("joints", t, 3)
