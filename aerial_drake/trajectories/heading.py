@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["unit_phasor_derivatives", "heading_reference", "rotated_offset"]
+__all__ = ["unit_phasor_derivatives", "heading_reference", "rotated_offset",
+           "heading_and_offset"]
 
 
 def unit_phasor_derivatives(phi: np.ndarray) -> np.ndarray:
@@ -41,3 +42,14 @@ def rotated_offset(phi: np.ndarray, r_o: np.ndarray) -> np.ndarray:
     out = np.column_stack([xy.real, xy.imag, np.zeros(5)])
     out[0, 2] = r_o[2]
     return out
+
+
+def heading_and_offset(phi: np.ndarray, r_o: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`heading_reference` and :func:`rotated_offset` from one evaluation of the
+    phasor's derivatives (``phi``: phi4 and its first four derivatives)."""
+    z = unit_phasor_derivatives(np.asarray(phi, dtype=float)[:5])
+    heading = np.column_stack([z.real[:3], z.imag[:3], np.zeros(3)])
+    xy = z * complex(r_o[0], r_o[1])
+    offset = np.column_stack([xy.real, xy.imag, np.zeros(5)])
+    offset[0, 2] = r_o[2]
+    return heading, offset

@@ -31,7 +31,7 @@ import math
 import numpy as np
 
 from aerial_drake.trajectories.base import ReferenceSource
-from aerial_drake.trajectories.heading import heading_reference, rotated_offset
+from aerial_drake.trajectories.heading import heading_and_offset
 from aerial_drake.trajectories.hermite import PiecewiseHermite, hermite_segment
 from aerial_drake.trajectories.params import WaypointsParams
 from aerial_drake.trajectories.reference import (
@@ -140,6 +140,7 @@ class WaypointsReference(ReferenceSource):
         omegas = [np.asarray(w.ee_angular_velocity or [0.0, 0.0, 0.0], dtype=float)
                   for w in points]
         coefficients = []
+        fixed_axis: list[bool] = []
         zero = np.zeros(3)
         for i in range(len(points) - 1):
             r_end = log_so3(rotations[i].T @ rotations[i + 1])
@@ -154,30 +155,57 @@ class WaypointsReference(ReferenceSource):
             start_rate = rotations[i].T @ omegas[i]
             end_rate = rotation_vector_velocity(r_end, rotations[i + 1].T @ omegas[i + 1])
             end_acceleration = rotation_vector_acceleration(r_end, end_rate, zero)
+            # A segment at rest at both ends turns about the fixed axis of r_end (every
+            # coefficient of its r(tau) is parallel to r_end): then J_r(r) r' = r' and
+            # R = R_i exp(hat(r)) is Rodrigues' formula on that axis, done in fill() without
+            # the general rates (the same numbers, about a tenth of the cost).
+            fixed_axis.append(not np.any(omegas[i]) and not np.any(omegas[i + 1]))
             coefficients.append(hermite_segment(
                 points[i + 1].time - points[i].time,
                 np.array([zero, start_rate, zero]),
                 np.array([r_end, end_rate, end_acceleration])))
+        self._fixed_axis = fixed_axis
+        # Per fixed-axis segment: u, R_i u, R_i hat(u), R_i hat(u)^2 (u = 0 for a segment
+        # that does not turn); the angle is theta = u . r.
+        self._axis_terms: list[tuple[np.ndarray, ...] | None] = []
+        for i, fixed in enumerate(fixed_axis):
+            if not fixed:
+                self._axis_terms.append(None)
+                continue
+            r_end = coefficients[i].sum(axis=0)  # r(tau = 1)
+            norm = float(np.linalg.norm(r_end))
+            u = r_end / norm if norm > 0.0 else np.zeros(3)
+            K = np.array([[0.0, -u[2], u[1]], [u[2], 0.0, -u[0]], [-u[1], u[0], 0.0]])
+            R_i = rotations[i]
+            self._axis_terms.append((u, R_i @ u, R_i @ K, R_i @ K @ K))
         return np.array(rotations[:-1]), PiecewiseHermite(self.times, np.array(coefficients))
 
     def fill(self, t: float, out: np.ndarray) -> None:
         P = self._position.evaluate(t, _C4)
         phi = self._heading.evaluate(t, _C4)[:, 0]
-        com = self._com.evaluate(t, _C4) if self._com is not None else \
-            P + rotated_offset(phi, self._com_offset)
+        heading, offset = heading_and_offset(phi, self._com_offset)
+        com = self._com.evaluate(t, _C4) if self._com is not None else P + offset
         out[:COM_REFERENCE_SIZE] = com.reshape(-1)
         task = out[COM_REFERENCE_SIZE:self._task_end]
         at = self._at
         task[at.p], task[at.v], task[at.a] = P[0], P[1], P[2]
         i, _ = self._orientation.segment(t)
         r = self._orientation.evaluate(t, _C2)
-        R = self._bases[i] @ exp_so3(r[0])
-        omega, domega = rotation_vector_rates(r[0], r[1], r[2])
-        task[at.R] = R.reshape(-1)
-        task[at.w], task[at.dw] = R @ omega, R @ domega  # World: w = R omega, dw = R domega
+        terms = self._axis_terms[i]
+        if terms is not None:  # about a fixed axis u: R = R_i (I + sin th K + (1 - cos th) K^2)
+            u, Ru, RK, RK2 = terms
+            theta, theta_dot, theta_ddot = r @ u
+            R = self._bases[i] + math.sin(theta) * RK + (1.0 - math.cos(theta)) * RK2
+            task[at.R] = R.reshape(-1)
+            task[at.w], task[at.dw] = theta_dot * Ru, theta_ddot * Ru  # R u = R_i u
+        else:
+            R = self._bases[i] @ exp_so3(r[0])
+            omega, domega = rotation_vector_rates(r[0], r[1], r[2])
+            task[at.R] = R.reshape(-1)
+            task[at.w], task[at.dw] = R @ omega, R @ domega  # World: w = R omega, R domega
         if self._joints is not None:
             q = self._joints.evaluate(t, _C2)
             task[at.q], task[at.q_dot], task[at.q_ddot] = q[0], q[1], q[2]
         else:
             task[at.q], task[at.q_dot], task[at.q_ddot] = self._joint_targets, 0.0, 0.0
-        out[self._task_end:] = heading_reference(phi).reshape(-1)
+        out[self._task_end:] = heading.reshape(-1)

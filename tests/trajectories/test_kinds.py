@@ -73,6 +73,19 @@ def test_waypoints_no_jump_in_snap_or_angular_acceleration_across_waypoints():
         assert np.allclose(at.v_ed, 0.0, atol=1e-12) and np.allclose(at.w_ed, 0.0, atol=1e-12)
 
 
+def test_waypoints_fixed_axis_fast_path_is_the_general_so3_formula():
+    """Rest-to-rest segments turn about a fixed axis and skip the general rates: the same
+    reference as the general R_i exp(hat(r)), J_r(r) r' path, to rounding."""
+    fast = reference_of(pick_and_place(), None)
+    general = reference_of(pick_and_place(), None)
+    assert any(term is not None for term in general._axis_terms)
+    general._axis_terms = [None] * len(general._axis_terms)
+    times = np.linspace(0.0, 15.0, 601)
+    a, b = fast.sample(times), general.sample(times)
+    for name in ("R_ed", "w_ed", "dw_ed"):
+        np.testing.assert_allclose(getattr(a, name), getattr(b, name), rtol=0, atol=1e-12)
+
+
 def test_waypoints_pose_and_heading_at_the_waypoints():
     params = pick_and_place()
     source = reference_of(params, None)
