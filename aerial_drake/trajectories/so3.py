@@ -12,13 +12,16 @@ closed form. Each threshold is chosen so that the closed form's rounding error a
 near 1e-15 relative and the series' truncation below it is under 1e-22; the tests check every
 function against 50-digit references and the two branches' agreement at each threshold.
 
-Pure numpy and ``math``: no Drake, no numba.
+Pure numpy and ``math``: no Drake, no numba (hat and vee are the dynamics layer's).
 """
 
 import math
 from fractions import Fraction
 
 import numpy as np
+
+from aerial_drake.dynamics.decoupling import hat as _hat
+from aerial_drake.dynamics.decoupling import vee as _vee
 
 __all__ = [
     "hat",
@@ -148,17 +151,18 @@ def _vector(v: np.ndarray, name: str) -> np.ndarray:
 
 
 def hat(v: np.ndarray) -> np.ndarray:
-    """The skew matrix of ``v`` (3,): ``hat(v) @ u == np.cross(v, u)``."""
-    x, y, z = _vector(v, "v")
-    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+    """The skew matrix of ``v`` (3,): ``hat(v) @ u == np.cross(v, u)`` (shape-checked
+    :func:`aerial_drake.dynamics.decoupling.hat`)."""
+    return _hat(_vector(v, "v"))
 
 
 def vee(S: np.ndarray) -> np.ndarray:
-    """The vector (3,) of the skew part (S - S^T)/2 of ``S`` (3, 3); the inverse of :func:`hat`."""
+    """The vector (3,) of the skew part (S - S^T)/2 of ``S`` (3, 3); the inverse of :func:`hat`
+    (shape-checked :func:`aerial_drake.dynamics.decoupling.vee`)."""
     S = np.asarray(S, dtype=float)
     if S.shape != (3, 3):
         raise ValueError(f"S must have shape (3, 3), got {S.shape}")
-    return 0.5 * np.array([S[2, 1] - S[1, 2], S[0, 2] - S[2, 0], S[1, 0] - S[0, 1]])
+    return _vee(S)
 
 
 def exp_so3(r: np.ndarray) -> np.ndarray:

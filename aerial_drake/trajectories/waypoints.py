@@ -41,6 +41,7 @@ from aerial_drake.trajectories.reference import (
 )
 from aerial_drake.trajectories.so3 import (
     exp_so3,
+    hat,
     log_so3,
     rotation_vector_acceleration,
     rotation_vector_rates,
@@ -164,7 +165,6 @@ class WaypointsReference(ReferenceSource):
                 points[i + 1].time - points[i].time,
                 np.array([zero, start_rate, zero]),
                 np.array([r_end, end_rate, end_acceleration])))
-        self._fixed_axis = fixed_axis
         # Per fixed-axis segment: u, R_i u, R_i hat(u), R_i hat(u)^2 (u = 0 for a segment
         # that does not turn); the angle is theta = u . r.
         self._axis_terms: list[tuple[np.ndarray, ...] | None] = []
@@ -175,7 +175,7 @@ class WaypointsReference(ReferenceSource):
             r_end = coefficients[i].sum(axis=0)  # r(tau = 1)
             norm = float(np.linalg.norm(r_end))
             u = r_end / norm if norm > 0.0 else np.zeros(3)
-            K = np.array([[0.0, -u[2], u[1]], [u[2], 0.0, -u[0]], [-u[1], u[0], 0.0]])
+            K = hat(u)
             R_i = rotations[i]
             self._axis_terms.append((u, R_i @ u, R_i @ K, R_i @ K @ K))
         return np.array(rotations[:-1]), PiecewiseHermite(self.times, np.array(coefficients))

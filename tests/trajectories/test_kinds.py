@@ -161,6 +161,11 @@ def circle(t, wrong=False):
                            q_jd_dot=np.zeros(1), q_jd_ddot=np.zeros(1),
                            b1d=np.array([[1.0, 0, 0], [0, 0, 0], [0, 0, 0]]))
 
+def breaks_later(t):
+    if t > 2.0:
+        raise ZeroDivisionError("no path after 2 s")
+    return circle(t)
+
 def wrong_snap(t):
     return circle(t, wrong=True)
 
@@ -276,3 +281,11 @@ def test_drake_trajectory_dict_rows_checked():
         DrakeTrajectoriesReference(
             {"com": PiecewisePolynomial(np.zeros((2, 1))),
              "ee_position": PiecewisePolynomial(np.zeros((3, 1)))}, np.zeros(1))
+
+
+def test_python_function_that_raises_during_the_run_is_refused_at_load(user_module):
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(_python_scenario(user_module, "user_paths:breaks_later"))
+    message = str(err.value)
+    assert "ZeroDivisionError: no path after 2 s" in message and "failed while sampled" in message
+    assert err.value.field == "trajectory.python.function"

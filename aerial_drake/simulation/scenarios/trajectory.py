@@ -42,9 +42,10 @@ def check_trajectory(scenario: Any, joint_nominal: np.ndarray) -> None:
     times = np.linspace(0.0, scenario.duration, count + 1)
     try:
         found_jump = find_discontinuity(source.sample, times)
-    except ValueError as err:
+    except Exception as err:  # the user's function: whatever it raises, named, before a run
         raise ScenarioError(f"trajectory: python.function "
-                            f"{scenario.trajectory.python.function!r}: {err}",
+                            f"{scenario.trajectory.python.function!r} failed while sampled "
+                            f"over [0, {scenario.duration:g}] s: {type(err).__name__}: {err}",
                             "trajectory.python.function") from None
     if found_jump is not None:
         raise ScenarioError(
