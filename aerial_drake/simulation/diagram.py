@@ -349,10 +349,10 @@ def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = Non
     scenario = resolve_random_disturbances(scenario)
     loop = add_closed_loop(builder, scenario, controller_factory=controller_factory)
     sim = loop.simulated_plant
-    for target, port in (("helicopter", "helicopter_wrench"),
+    for target, port in (("vehicle", "helicopter_wrench"),
                          ("end_effector", "end_effector_wrench")):
         wrench = add_wrench_source(builder, scenario.disturbances, target).get_output_port()
-        if target == "helicopter":  # the wind's drag acts beside the windows (wind.py)
+        if target == "vehicle":  # the wind's drag acts beside the windows (wind.py)
             wrench = add_wind(builder, scenario.wind, scenario.duration, sim.plant,
                               sim.base_body, wrench)
         builder.Connect(wrench, loop.input_port(port))

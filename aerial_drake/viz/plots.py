@@ -51,8 +51,8 @@ FORMATS = ("png", "pdf")
 NOMINAL_COLOR = "black"
 DISTURBED_COLOR = "0.6"
 DESIRED_COLOR = "tab:red"
-WINDOW_COLORS = {"helicopter": ("tab:green", 0.18), "end_effector": ("tab:orange", 0.22)}
-WINDOW_LABELS = {"helicopter": "force on the vehicle",
+WINDOW_COLORS = {"vehicle": ("tab:green", 0.18), "end_effector": ("tab:orange", 0.22)}
+WINDOW_LABELS = {"vehicle": "force on the vehicle",
                  "end_effector": "wrench at the end effector"}
 JOINT_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown",
                 "tab:pink")

@@ -48,7 +48,7 @@ def short_scenario(name="nominal", **overrides):
     helicopter's over 0.1-0.2 s, the end effector's from 0.2 s to the end (so the last frame,
     which a replay stops on, shows the orange arrow)."""
     disturbances = [
-        Disturbance(target="helicopter", start=0.1, stop=0.2, force=[0.0, 50.0, 0.0]),
+        Disturbance(target="vehicle", start=0.1, stop=0.2, force=[0.0, 50.0, 0.0]),
         Disturbance(target="end_effector", start=0.2, stop=1.0, force=[40.0, 40.0, 40.0],
                     torque=[20.0, 20.0, 20.0]),
     ]
