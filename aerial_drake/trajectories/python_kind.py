@@ -14,7 +14,7 @@
 
 The reference is evaluated once at load (shapes and finiteness, with errors naming the
 field); the scenario's checks then test its derivatives numerically over the whole run
-(:mod:`aerial_drake.simulation.continuity`) before anything is simulated.
+(:mod:`aerial_drake.trajectories.continuity`) before anything is simulated.
 """
 
 from __future__ import annotations
