@@ -1,6 +1,6 @@
 """Feasibility of the whole reference before simulating (aerial_drake.simulation.feasibility,
-aerial_drake.trajectories.continuity): each infeasible reference is refused naming the time and the cause, and the
-time named is where the cause holds; the shipped scenarios pass."""
+aerial_drake.trajectories.continuity): each infeasible reference is refused naming the time
+and the cause, and the time named is where the cause holds; the shipped scenarios pass."""
 
 import dataclasses
 import re

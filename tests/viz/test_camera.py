@@ -1,13 +1,18 @@
 """The camera of a run's Meshcat view (:mod:`aerial_drake.viz.camera`): the robot stays in
 view over the whole run."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
+from aerial_drake.simulation.runner import run_scenario
 from aerial_drake.simulation.scenarios import load_scenario, shipped_scenarios
+from aerial_drake.trajectories import kinds
 from aerial_drake.trajectories.kinds import reference_of
 from aerial_drake.trajectories.params import HoverParams, TrajectoryParams
 from aerial_drake.viz import camera as dut
+from aerial_drake.viz.meshcat_view import MeshcatView
 
 
 @pytest.mark.parametrize("name", sorted(shipped_scenarios()))
@@ -36,3 +41,17 @@ def test_the_camera_frames_the_reference_it_is_given():
     points = dut.robot_envelope(scenario, reference_of(elsewhere, [0.0]))
     assert np.any(np.all(points == [5.0, 6.0, 7.0], axis=1))
     assert not np.any(np.all(dut.robot_envelope(scenario) == [5.0, 6.0, 7.0], axis=1))
+
+
+def test_a_watched_run_builds_its_reference_once(monkeypatch):
+    """The Meshcat view (camera and overlay) draws the run's own reference: a watched run
+    builds no more references than the scenario's load-time check and the run's one."""
+    scenario = load_scenario("nominal", overrides={"duration": 0.1})
+    builds = []
+    entry = kinds.REFERENCE_KINDS["paper"]
+    monkeypatch.setitem(kinds.REFERENCE_KINDS, "paper", dataclasses.replace(
+        entry, build=lambda params, targets: builds.append(1) or entry.build(params, targets)))
+    view = MeshcatView(scenario, port=0, live=False)
+    run_scenario(scenario, progress=False, configure=view.configure)
+    view.finish()
+    assert len(builds) == 2  # Scenario.validate's check, then the run's
