@@ -65,27 +65,3 @@ def test_a_run_builds_its_reference_once_and_checks_it_once_per_build(monkeypatc
     np.testing.assert_array_equal(result.log["task_reference"], task)
     np.testing.assert_array_equal(result.log["heading_reference"], heading)
 
-
-def test_a_run_reads_the_reference_the_diagram_built(monkeypatch):
-    """Every reader takes the generator's source: with that source swapped for one that
-    raises, the run's checks, start posture and logs all reach it (none rebuilds its own)."""
-    scenario = load_scenario("nominal", overrides={"duration": DURATION})
-    reads = []
-
-    def spy(builder, loop):
-        source = loop.reference.source
-        for name in ("evaluate", "sample"):
-            method = getattr(source, name)
-            monkeypatch.setattr(source, name, lambda *args, _m=method, _n=name: (
-                reads.append(_n), _m(*args))[1])
-
-    original = runner.check_reference
-
-    def check_after_spy(scenario, model, *, reference=None):
-        assert reference is not None, "the runner must hand its reference to the checks"
-        return original(scenario, model, reference=reference)
-
-    monkeypatch.setattr(runner, "check_reference", check_after_spy)
-    runner.run_scenario(scenario, progress=False, configure=spy)
-    # After configure: the start posture (evaluate) and the logs (sample) read the source.
-    assert "evaluate" in reads and "sample" in reads
