@@ -52,7 +52,7 @@ SIGMA_MARGIN_FACTOR = 3.0
 REFINE_BELOW = 10.0
 
 
-def check_reference(scenario: Scenario, model: AerialManipulator, *,
+def check_reference(scenario: Scenario, model: AerialManipulator,
                     reference: ReferenceSource | None = None) -> None:
     """Raise ScenarioError at the first way the whole reference of ``scenario`` is not
     feasible for ``model`` (the controller's): a discontinuity in a derivative the law needs,

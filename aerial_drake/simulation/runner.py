@@ -330,7 +330,7 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
     if lock is not None:
         _note_replaced_results(scenario, lock.folder, stream)
     builder, loop, loggers = build_simulation(scenario, controller_factory=controller_factory)
-    check_reference(scenario, loop.controller_model, reference=loop.reference.source)
+    check_reference(scenario, loop.controller_model, loop.reference.source)
     if getattr(loop.controller, "compiled", True) is False:
         # Said once: every valid description is compiled today (quaternion base, revolute
         # and weld joints); this is for a structure a later change admits.
