@@ -6,11 +6,14 @@ rigid :class:`~aerial_drake.robots.models.AerialManipulator` (a fresh one per cl
 the system has the ports of :mod:`aerial_drake.control.interface`. Register your own with
 :func:`register_controller` (then ``controller: {type: NAME}`` in a scenario selects it), or
 hand a factory straight to :func:`aerial_drake.simulation.runner.run_scenario`
-(``controller_factory=``); ``diagrams/custom_controller.py`` shows both.
+(``controller_factory=``); ``diagrams/custom_controller.py`` shows both. A factory that
+takes a ``reference`` keyword also gets the run's
+:class:`~aerial_drake.trajectories.base.ReferenceSource` (:func:`make_controller_system`).
 """
 
 from __future__ import annotations
 
+import inspect
 from typing import Any, Callable
 
 import numpy as np
@@ -18,7 +21,8 @@ import numpy as np
 from aerial_drake.control.baselines.params import BASELINE_TYPES
 from aerial_drake.robots.models import AerialManipulator
 from aerial_drake.simulation.reference_pose import reference_configuration
-from aerial_drake.trajectories.kinds import evaluate_reference
+from aerial_drake.trajectories.base import ReferenceSource
+from aerial_drake.trajectories.kinds import reference_of
 
 # The scenario argument is a :class:`aerial_drake.simulation.scenarios.Scenario`; it is not
 # imported here because the scenarios import this module to check ``controller.type``.
@@ -45,27 +49,32 @@ def zero_controller(scenario: Any, model: AerialManipulator):
     return make_controller(model, scenario.gains, period=scenario.controller_period, zero=True)
 
 
-def body_offset_in_heading_frame(scenario: Any, model: AerialManipulator) -> np.ndarray:
+def body_offset_in_heading_frame(scenario: Any, model: AerialManipulator,
+                                 reference: ReferenceSource | None = None) -> np.ndarray:
     """The CoM's offset from the vehicle body at the reference configuration of t = 0, in
-    the heading frame [b1d, e3 x b1d, e3]: what the baselines' body reference keeps."""
+    the heading frame [b1d, e3 x b1d, e3]: what the baselines' body reference keeps.
+    ``reference``: the run's reference (None: built from ``scenario.trajectory``)."""
+    if reference is None:
+        reference = reference_of(scenario.trajectory, model.task_joint_nominal())
     plant = model.plant
     ctx = plant.CreateDefaultContext()
-    plant.SetPositions(ctx, reference_configuration(scenario, model))
+    plant.SetPositions(ctx, reference_configuration(scenario, model, reference=reference))
     p_b = plant.EvalBodyPoseInWorld(ctx, model.base_body).translation()
     offset = plant.CalcCenterOfMassPositionInWorld(ctx) - p_b
-    b1 = evaluate_reference(scenario.trajectory, 0.0, model.task_joint_nominal()).b1d[0]
+    b1 = reference.evaluate(0.0).b1d[0]
     H = np.column_stack([b1, np.cross([0.0, 0.0, 1.0], b1), [0.0, 0.0, 1.0]])
     return H.T @ offset
 
 
 def _baseline(kind: str) -> ControllerFactory:
-    def factory(scenario: Any, model: AerialManipulator):
+    def factory(scenario: Any, model: AerialManipulator,
+                reference: ReferenceSource | None = None):
         from aerial_drake.control.baselines.controller import BaselineController
         assert model.task is not None
         return BaselineController(
             model.plant, model.base_body, model.end_effector_frame, model.task,
             scenario.gains, kind=kind,
-            body_offset_H=body_offset_in_heading_frame(scenario, model),
+            body_offset_H=body_offset_in_heading_frame(scenario, model, reference),
             params=scenario.controller.baseline, period=scenario.controller_period)
     return factory
 
@@ -97,3 +106,16 @@ def controller_factory(scenario: Any) -> ControllerFactory:
         raise KeyError(f"controller.type: '{scenario.controller.type}' is not one of "
                        f"{controller_types()} (register your own with aerial_drake."
                        "simulation.controllers.register_controller)") from None
+
+
+def make_controller_system(factory: ControllerFactory, scenario: Any, model: AerialManipulator,
+                           reference: ReferenceSource):
+    """``factory(scenario, model)``, with ``reference=`` the run's reference if the factory
+    takes that keyword (the baselines' do: their body offset is measured on it)."""
+    try:
+        takes_reference = "reference" in inspect.signature(factory).parameters
+    except (TypeError, ValueError):  # a callable without a signature Python can read
+        takes_reference = False
+    if takes_reference:
+        return factory(scenario, model, reference=reference)  # type: ignore[call-arg]
+    return factory(scenario, model)

@@ -11,18 +11,22 @@ import numpy as np
 from aerial_drake.control.law import desired_attitude, desired_force
 from aerial_drake.dynamics.equilibrium import solve_configuration
 from aerial_drake.robots.models import AerialManipulator
-from aerial_drake.trajectories.kinds import evaluate_reference
+from aerial_drake.trajectories.base import ReferenceSource
+from aerial_drake.trajectories.kinds import reference_of
 from aerial_drake.trajectories.reference import ReferenceSample
 
 
-def reference_configuration(scenario: Any, model: AerialManipulator,
-                            t: float = 0.0) -> np.ndarray:
+def reference_configuration(scenario: Any, model: AerialManipulator, t: float = 0.0, *,
+                            reference: ReferenceSource | None = None) -> np.ndarray:
     """Positions of ``model`` that realise ``scenario``'s reference at time ``t`` exactly: CoM
     on x_d, base attitude R_d of (13) for zero CoM error, end effector on (p_ed, R_ed),
-    the task's joints at their targets. (``scenario`` a
+    the task's joints at their targets. ``reference``: the run's reference (None: built from
+    ``scenario.trajectory``). (``scenario`` a
     :class:`~aerial_drake.simulation.scenarios.Scenario`; not imported here, as the scenarios
     import the controllers, which import this.)"""
-    ref = evaluate_reference(scenario.trajectory, t, model.task_joint_nominal())
+    if reference is None:
+        reference = reference_of(scenario.trajectory, model.task_joint_nominal())
+    ref = reference.evaluate(t)
     # Joint limits are not imposed: the simulated plant does not enforce them, and at t = 0 the
     # paper's reference needs joint 6 about 0.19 rad past its 120 deg (docs/control.md).
     return solve_configuration(model, **realising_targets(model, ref),
