@@ -16,11 +16,8 @@ register_controller`) is unknown to spawned workers: compare it with ``jobs=1``.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import functools
-import os
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TextIO
@@ -29,11 +26,10 @@ import numpy as np
 
 from aerial_drake.simulation.metrics import RESPONSE_TAIL_S
 from aerial_drake.simulation.outputs import OutputError, strict_json, write_text_atomically
+from aerial_drake.simulation.run_folder import Run
 from aerial_drake.simulation.scenarios import ScenarioError, folder_name, load_scenario
-from aerial_drake.studies.paper import format_table, run_batch
-from aerial_drake.studies.reporting import report_error, report_exception
-from aerial_drake.viz.compare import write_compare_figures
-from aerial_drake.viz.plots import Run
+from aerial_drake.studies.batch import run_batch
+from aerial_drake.studies.summary import format_table
 
 DEFAULT_CONTROLLERS = ("paper", "uncoupled", "static_compensation")
 
@@ -99,7 +95,7 @@ def run_compare(scenario: str, controllers: tuple[str, ...] = DEFAULT_CONTROLLER
     signal (SIGINT, SIGTERM, SIGHUP) stops the comparison as it stops ``run paper``: the
     running run(s) write their logs, the remaining controllers are not started, no figure,
     summary or comparison is written, and :attr:`CompareResult.interrupted` holds the
-    signal's number (:func:`aerial_drake.studies.paper.run_batch`, also with ``jobs`` > 1).
+    signal's number (:func:`aerial_drake.studies.batch.run_batch`, also with ``jobs`` > 1).
     Only complete run folders (``metrics.json`` present) are loaded and drawn."""
     if not controllers:
         raise ScenarioError("--controllers: name at least one controller")
@@ -127,6 +123,7 @@ def run_compare(scenario: str, controllers: tuple[str, ...] = DEFAULT_CONTROLLER
     if result.interrupted is not None:
         return result
     if result.runs:
+        from aerial_drake.viz.compare import write_compare_figures  # (matplotlib: here only)
         result.figures = write_compare_figures(out, result.runs, first.name)
     write_text_atomically(out / "summary.txt", result.table + "\n")
     write_text_atomically(out / "comparison.json", strict_json(comparison_summary(metrics)))
@@ -187,34 +184,3 @@ def disturbance_displacement(disturbed: Run, undisturbed: Run,
                     "ee_moved_max_m": float(ee[mask].max()) if mask.any() else None,
                     "com_moved_max_m": float(com[mask].max()) if mask.any() else None})
     return out
-
-
-def cli_compare(args: argparse.Namespace) -> int:
-    """``aerial-drake compare SCENARIO [--controllers A,B] [--jobs N] [--duration S]
-    [--out DIR] [--quiet] [--json]``. Exit statuses as ``run``'s (docs/reliability.md): 2 bad
-    input or output folder, 3 results not written, 128 + n stopped by signal n, 1 a run
-    failed. With ``--json`` stdout holds only JSON (comparison.json's content, or an error
-    object); the table and the "wrote" lines go to stderr."""
-    controllers = tuple(c.strip() for c in args.controllers.split(",") if c.strip())
-    jobs = args.jobs if args.jobs is not None else min(len(controllers), os.cpu_count() or 1)
-    try:
-        result = run_compare(args.scenario, controllers, Path(args.out) / "compare",
-                             args.duration, jobs=jobs, progress=not args.quiet,
-                             stream=sys.stderr, undisturbed=args.undisturbed)
-    except Exception as err:  # the foreseen ones get their status; a bug is raised again
-        return report_exception(args, err)
-    if result.interrupted is not None:
-        return report_error(args, 128 + result.interrupted, "; ".join(result.failures.values()),
-                            f"logs up to the interruption are in {result.out_dir}")
-    human = sys.stderr if args.json else sys.stdout
-    print(result.table, file=human)
-    for path in result.figures:
-        if path.suffix == ".png":
-            print(f"wrote {path} (and .pdf)", file=human)
-    print(f"wrote {result.out_dir / 'summary.txt'} and {result.out_dir / 'comparison.json'}",
-          file=human)
-    if args.json:
-        print(strict_json(comparison_summary({n: r.metrics for n, r in result.runs.items()})))
-    for name, reason in result.failures.items():
-        print(f"error: {name}: {reason}", file=sys.stderr)
-    return 0 if result.completed else 1
