@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from aerial_drake.cli.errors import report_error, report_exception
+from aerial_drake.cli.overrides import scenario_overrides
 from aerial_drake.cli.restart import compile_first
 
 
@@ -31,8 +32,8 @@ def cmd_compare(args: argparse.Namespace) -> int:
     jobs = args.jobs if args.jobs is not None else min(len(controllers), os.cpu_count() or 1)
     try:
         result = run_compare(args.scenario, controllers, Path(args.out) / "compare",
-                             args.duration, jobs=jobs, progress=not args.quiet,
-                             stream=sys.stderr, undisturbed=args.undisturbed)
+                             jobs=jobs, progress=not args.quiet, stream=sys.stderr,
+                             undisturbed=args.undisturbed, overrides=scenario_overrides(args))
     except Exception as err:  # the foreseen ones get their status; a bug is raised again
         return report_exception(args, err)
     if result.interrupted is not None:

@@ -2,28 +2,33 @@
 (:func:`scenario_overrides`), and which option set a field an error names
 (:func:`option_note`).
 
-Today the options ``--duration`` and ``--max-log-mb`` of ``run`` set top-level fields; the
-dictionary goes to :func:`aerial_drake.simulation.scenarios.load_scenario` (``run SCENARIO``)
-and :func:`aerial_drake.studies.paper.run_paper` (``run paper``) as ``overrides``. A new
-option that sets scenario fields (e.g. ``--set KEY=VALUE``) adds its pairs here, and both
-commands take them. (``--seed`` perturbs the initial offsets after loading:
-:func:`aerial_drake.studies.paper.perturb_initial`; ``compare`` and ``study`` pass their
-``--duration`` to :func:`aerial_drake.studies.compare.run_compare` and
-:func:`aerial_drake.studies.spec.load_study`.)
+Today the options ``--duration`` (``run``, ``compare``) and ``--max-log-mb`` (``run``) set
+top-level fields (:data:`FIELD_OPTIONS`); the dictionary goes as ``overrides`` to
+:func:`aerial_drake.simulation.scenarios.load_scenario` (``run SCENARIO``),
+:func:`aerial_drake.studies.paper.run_paper` (``run paper``) and
+:func:`aerial_drake.studies.compare.run_compare` (``compare``). A new option that sets
+scenario fields (e.g. ``--set KEY=VALUE``) adds its pairs in :func:`scenario_overrides`, and
+the three commands take them. (``--seed`` perturbs the initial offsets after loading:
+:func:`aerial_drake.studies.paper.perturb_initial`; ``study`` passes its ``--duration`` to
+:func:`aerial_drake.studies.spec.load_study`, which applies it to every run.)
 """
 
 from __future__ import annotations
 
 import argparse
 
+#: Scenario field -> the option (argparse ``dest``) that sets it, on the commands that have it.
+FIELD_OPTIONS = {"duration": "duration", "max_log_mb": "max_log_mb"}
+
 
 def scenario_overrides(args: argparse.Namespace) -> dict:
-    """The scenario fields the command line sets, ``{field: value}`` (empty: none)."""
+    """The scenario fields the command line sets, ``{field: value}`` (empty: none); an option
+    the command does not have, or left unset, sets nothing."""
     overrides: dict = {}
-    if args.duration is not None:
-        overrides["duration"] = args.duration
-    if args.max_log_mb is not None:
-        overrides["max_log_mb"] = args.max_log_mb
+    for field, dest in FIELD_OPTIONS.items():
+        value = getattr(args, dest, None)
+        if value is not None:
+            overrides[field] = value
     return overrides
 
 

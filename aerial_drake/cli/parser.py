@@ -1,7 +1,7 @@
 """The ``aerial-drake`` argument parser: every command, option, help text and default. Each
-subcommand's ``func`` is the ``cmd_*`` function of its command module (:mod:`.run`,
-:mod:`.paper` through :mod:`.run`, :mod:`.compare`, :mod:`.plot`, :mod:`.info`,
-:mod:`.analyze`, :mod:`.study`), looked up when the parser is built."""
+subcommand's ``func`` is the ``cmd_*`` function of its command module in
+:mod:`aerial_drake.cli` (``run``, which hands ``run paper`` to ``paper``; ``compare``,
+``plot``, ``info``, ``analyze``, ``study``), looked up when the parser is built."""
 
 from __future__ import annotations
 

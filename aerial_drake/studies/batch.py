@@ -1,6 +1,7 @@
 """Several scenarios run into their own folders, one after the other or in a process pool
-(:func:`run_batch`): the batch under ``aerial-drake run paper`` (:mod:`.paper`) and
-``aerial-drake compare`` (:mod:`.compare`). The complete runs are loaded with
+(:func:`run_batch`): the batch under ``aerial-drake run paper``
+(:mod:`aerial_drake.studies.paper`) and ``aerial-drake compare``
+(:mod:`aerial_drake.studies.compare`). The complete runs are loaded with
 :func:`aerial_drake.simulation.run_folder.load_run` (no matplotlib)."""
 
 from __future__ import annotations

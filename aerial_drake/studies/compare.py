@@ -50,8 +50,10 @@ class CompareResult:
 
 
 def _scenario_for(scenario: str, controller: str, duration: float | None,
-                  undisturbed: bool = False):
-    overrides: dict = {"duration": duration} if duration is not None else {}
+                  undisturbed: bool = False, overrides: dict | None = None):
+    overrides = dict(overrides or {})
+    if duration is not None:
+        overrides["duration"] = duration
     base = load_scenario(scenario, overrides=overrides or None)
     if undisturbed:  # the same run without its disturbance windows, under its own name
         base = dataclasses.replace(base, name=f"{base.name}_undisturbed", disturbances=[])
@@ -59,10 +61,11 @@ def _scenario_for(scenario: str, controller: str, duration: float | None,
     return dataclasses.replace(base, controller=config).validate()
 
 
-def _rebuild(scenario: str, duration: float | None, undisturbed: bool, controller: str):
+def _rebuild(scenario: str, duration: float | None, undisturbed: bool,
+             overrides: dict | None, controller: str):
     """:func:`_scenario_for` with the controller last, for a worker process (picklable with
     functools.partial; a Scenario itself does not pickle)."""
-    return _scenario_for(scenario, controller, duration, undisturbed)
+    return _scenario_for(scenario, controller, duration, undisturbed, overrides)
 
 
 def _controller_folders(out: Path, controllers: tuple[str, ...]) -> dict[str, Path]:
@@ -82,12 +85,14 @@ def _controller_folders(out: Path, controllers: tuple[str, ...]) -> dict[str, Pa
 def run_compare(scenario: str, controllers: tuple[str, ...] = DEFAULT_CONTROLLERS,
                 out_dir: str | Path = "out/compare", duration: float | None = None, *,
                 jobs: int = 1, progress: bool = True, stream: TextIO | None = None,
-                undisturbed: bool = False) -> CompareResult:
+                undisturbed: bool = False, overrides: dict | None = None) -> CompareResult:
     """Run ``scenario`` (a shipped name or a YAML path) once per controller into
     ``out_dir/<scenario folder name>/<controller>/`` and write the overlays and the table
     there (the folder names sanitised as ``run``'s: Scenario.folder_name).
     ``undisturbed``: the scenario without its disturbance windows (named
     ``<name>_undisturbed``), the reference of :func:`disturbance_displacement`.
+    ``overrides`` replaces more top-level fields of the scenario (``duration`` wins over one
+    there).
 
     Every scenario is built and checked before anything runs (ScenarioError,
     UnreachablePose); an output folder that cannot be used raises OutputError. A controller
@@ -101,7 +106,7 @@ def run_compare(scenario: str, controllers: tuple[str, ...] = DEFAULT_CONTROLLER
         raise ScenarioError("--controllers: name at least one controller")
     if len(set(controllers)) != len(controllers):
         raise ScenarioError(f"--controllers: a controller is named twice: {list(controllers)}")
-    scenarios = {name: _scenario_for(scenario, name, duration, undisturbed)
+    scenarios = {name: _scenario_for(scenario, name, duration, undisturbed, overrides)
                  for name in controllers}  # every name checked before anything runs
     first = scenarios[controllers[0]]
     out = Path(out_dir) / first.folder_name
@@ -113,7 +118,8 @@ def run_compare(scenario: str, controllers: tuple[str, ...] = DEFAULT_CONTROLLER
                           "choose another --out") from None
     result = CompareResult(out_dir=out)
     batch = run_batch(scenarios, folders, jobs=jobs,
-                      rebuild=functools.partial(_rebuild, scenario, duration, undisturbed),
+                      rebuild=functools.partial(_rebuild, scenario, duration, undisturbed,
+                                                overrides),
                       progress=progress, stream=stream,
                       labels={n: f"'{first.name}' with controller '{n}'" for n in controllers})
     result.runs, result.failures, result.interrupted = (batch.runs, batch.failures,
