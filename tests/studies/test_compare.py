@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 from aerial_drake import cli
+from aerial_drake.cli import errors as reporting
 from aerial_drake.simulation import interrupts, outputs, runner
 from aerial_drake.simulation.scenarios import Disturbance, ScenarioError, shipped_scenarios
 from aerial_drake.studies import compare as dut
-from aerial_drake.studies import reporting
 from aerial_drake.viz.compare import COMPARE_FIGURE_NAMES
 
 
