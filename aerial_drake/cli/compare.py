@@ -20,8 +20,9 @@ def cmd_compare(args: argparse.Namespace) -> int:
     failed. With ``--json`` stdout holds only JSON (comparison.json's content, or an error
     object); the table and the "wrote" lines go to stderr."""
     from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
-    try:  # a misspelt scenario fails at once, not after the first-run compile
-        load_scenario(args.scenario)
+    try:  # a misspelt scenario or override fails at once, not after the first-run compile
+        overrides = scenario_overrides(args)
+        load_scenario(args.scenario, overrides=overrides)
     except ScenarioError as err:
         return report_error(args, 2, err)
     compile_first(args.restartable)
@@ -33,7 +34,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     try:
         result = run_compare(args.scenario, controllers, Path(args.out) / "compare",
                              jobs=jobs, progress=not args.quiet, stream=sys.stderr,
-                             undisturbed=args.undisturbed, overrides=scenario_overrides(args))
+                             undisturbed=args.undisturbed, overrides=overrides)
     except Exception as err:  # the foreseen ones get their status; a bug is raised again
         return report_exception(args, err)
     if result.interrupted is not None:

@@ -43,6 +43,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("scenario", help="shipped scenario name (e.g. nominal), a YAML file, or "
                      "'paper' (nominal and disturbed, and the paper's figures, in OUT/paper)")
     run.add_argument("--duration", type=float, default=None, help="override the duration (s)")
+    run.add_argument("--set", dest="assignments", action="append", default=[],
+                     metavar="KEY=VALUE", help="set any scenario field, KEY a dotted name, VALUE read as YAML (e.g. --set gains.k_R=300 --set initial.base_position_offset=[0.1,0,0]); repeatable")
     run.add_argument("--out", default="out", help="output folder (default: ./out)")
     run.add_argument("--quiet", action="store_true", help="no progress line")
     run.add_argument("--json", action="store_true",
@@ -88,6 +90,8 @@ def build_parser() -> argparse.ArgumentParser:
                          help="parallel processes (default: one per controller, at most the "
                               "number of CPUs; 1 = one after the other, with progress)")
     compare.add_argument("--duration", type=float, default=None, help="override the duration")
+    compare.add_argument("--set", dest="assignments", action="append", default=[],
+                         metavar="KEY=VALUE", help="set any scenario field, KEY a dotted name, VALUE read as YAML (e.g. --set gains.k_R=300 --set initial.base_position_offset=[0.1,0,0]); repeatable")
     compare.add_argument("--out", default="out", help="output folder; runs go to "
                          "OUT/compare/SCENARIO/CONTROLLER (default: ./out)")
     compare.add_argument("--quiet", action="store_true", help="no progress lines")

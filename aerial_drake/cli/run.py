@@ -94,7 +94,7 @@ def cmd_run(args: argparse.Namespace) -> int:
             from aerial_drake.studies.paper import perturb_initial
             scenario = perturb_initial(scenario, args.seed)
     except ScenarioError as err:
-        return report_error(args, 2, ScenarioError(f"{err}{option_note(err, overrides)}",
+        return report_error(args, 2, ScenarioError(f"{err}{option_note(err, overrides, args)}",
                                                    err.field))
     compile_first(args.restartable)  # after the scenario's checks, before Meshcat starts
     out = Path(args.out) / scenario.folder_name
