@@ -9,8 +9,9 @@ repeatable) any field by its dotted name, VALUE read as YAML
 ``overrides`` to
 :func:`aerial_drake.simulation.scenarios.load_scenario` (``run SCENARIO``),
 :func:`aerial_drake.studies.paper.run_paper` (``run paper``) and
-:func:`aerial_drake.studies.compare.run_compare` (``compare``). A field set twice (``--duration 2 --set duration=3``) is
-refused. (``--seed`` perturbs the initial offsets after loading:
+:func:`aerial_drake.studies.compare.run_compare` (``compare``). A field set twice
+(``--duration 2 --set duration=3``) is refused. (``--seed`` perturbs the initial offsets
+after loading:
 :func:`aerial_drake.studies.paper.perturb_initial`; ``study`` passes its ``--duration`` to
 :func:`aerial_drake.studies.spec.load_study`, which applies it to every run.)
 """

@@ -28,6 +28,11 @@ class _Defaults(argparse.ArgumentDefaultsHelpFormatter):
         return super()._get_help_string(action)
 
 
+#: The help of ``--set`` (run, compare).
+SET_HELP = ("set any scenario field, KEY a dotted name, VALUE read as YAML (e.g. --set "
+            "gains.k_R=300 --set initial.base_position_offset=[0.1,0,0]); repeatable")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``aerial-drake`` parser: one subcommand per command, each with ``func`` (its
     module's ``cmd_*``, which calls the library and prints)."""
@@ -44,7 +49,7 @@ def build_parser() -> argparse.ArgumentParser:
                      "'paper' (nominal and disturbed, and the paper's figures, in OUT/paper)")
     run.add_argument("--duration", type=float, default=None, help="override the duration (s)")
     run.add_argument("--set", dest="assignments", action="append", default=[],
-                     metavar="KEY=VALUE", help="set any scenario field, KEY a dotted name, VALUE read as YAML (e.g. --set gains.k_R=300 --set initial.base_position_offset=[0.1,0,0]); repeatable")
+                     metavar="KEY=VALUE", help=SET_HELP)
     run.add_argument("--out", default="out", help="output folder (default: ./out)")
     run.add_argument("--quiet", action="store_true", help="no progress line")
     run.add_argument("--json", action="store_true",
@@ -91,7 +96,7 @@ def build_parser() -> argparse.ArgumentParser:
                               "number of CPUs; 1 = one after the other, with progress)")
     compare.add_argument("--duration", type=float, default=None, help="override the duration")
     compare.add_argument("--set", dest="assignments", action="append", default=[],
-                         metavar="KEY=VALUE", help="set any scenario field, KEY a dotted name, VALUE read as YAML (e.g. --set gains.k_R=300 --set initial.base_position_offset=[0.1,0,0]); repeatable")
+                         metavar="KEY=VALUE", help=SET_HELP)
     compare.add_argument("--out", default="out", help="output folder; runs go to "
                          "OUT/compare/SCENARIO/CONTROLLER (default: ./out)")
     compare.add_argument("--quiet", action="store_true", help="no progress lines")
