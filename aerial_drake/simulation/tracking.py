@@ -101,14 +101,15 @@ class Tracking:
     def __call__(self, x: np.ndarray, com: np.ndarray, task: np.ndarray,
                  heading: np.ndarray) -> np.ndarray:
         single = np.ndim(x) == 1
-        rows = [np.atleast_2d(np.asarray(a, dtype=float)) for a in (x, com, task, heading)]
-        if len({len(r) for r in rows}) != 1:
-            raise ValueError(f"the state and the references have {[len(r) for r in rows]} "
-                             "samples: give one row of each per sample")
+        X, C, T, H = (np.atleast_2d(np.asarray(a, dtype=float))
+                      for a in (x, com, task, heading))
+        if not len(X) == len(C) == len(T) == len(H):
+            raise ValueError(f"the state and the references have {len(X)}, {len(C)}, "
+                             f"{len(T)}, {len(H)} samples: give one row of each per sample")
         if self._compiled is not None:
-            out = self._compiled(*rows, self.width)
+            out = self._compiled(X, C, T, H, self.width)
         else:
-            out = np.array([self._row(*sample) for sample in zip(*rows)]).reshape(
+            out = np.array([self._row(*sample) for sample in zip(X, C, T, H)]).reshape(
                 -1, self.width)
         return out[0] if single else out
 

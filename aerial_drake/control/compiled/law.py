@@ -176,6 +176,7 @@ class CompiledTracking:
                  width: int) -> np.ndarray:
         """(N, ``width``) rows of the tracking errors (``width`` of the layout)."""
         out = np.empty((len(X), width))
-        arrays = [np.ascontiguousarray(a, dtype=float) for a in (X, com, task, heading)]
-        _tracking(*arrays, out, self._model, self._index, self._work)
+        X, com, task, heading = (np.ascontiguousarray(a, dtype=float)
+                                 for a in (X, com, task, heading))
+        _tracking(X, com, task, heading, out, self._model, self._index, self._work)
         return out
