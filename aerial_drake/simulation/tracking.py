@@ -77,9 +77,10 @@ class Tracking:
     :class:`AerialManipulator`): ``tracking(x, com, task, heading)`` gives one row of
     :func:`tracking_layout` per sample (rows of ``x`` and the references), or one vector for
     1-D inputs. By the compiled kernels where they serve the model, else by the reference
-    implementation (:mod:`aerial_drake.dynamics.decoupling` and Drake's kinematics)."""
+    implementation (:mod:`aerial_drake.dynamics.decoupling` and Drake's kinematics), or by
+    that with ``compiled=False``."""
 
-    def __init__(self, model: AerialManipulator):
+    def __init__(self, model: AerialManipulator, *, compiled: bool = True):
         if model.task is None:
             raise ValueError("Tracking needs a finalized model (its task resolved)")
         self.model, self.task = model, model.task
@@ -87,14 +88,18 @@ class Tracking:
         self.layout = tracking_layout(self.n)
         self.width = sum(size for _, size in self.layout)
         frame = model.end_effector_frame
+        self._compiled: CompiledTracking | None = None
         try:
-            tree = KinematicTree.from_plant(model.plant, model.base_body)
-            X_BE = frame.GetFixedPoseInBodyFrame()
-            ee = (tree.index_of(frame.body()), X_BE.rotation().matrix(), X_BE.translation())
-            self._compiled: CompiledTracking | None = CompiledTracking(
-                tree, model.plant.num_positions(), ee, self.task)
+            if compiled:
+                tree = KinematicTree.from_plant(model.plant, model.base_body)
+                X_BE = frame.GetFixedPoseInBodyFrame()
+                ee = (tree.index_of(frame.body()), X_BE.rotation().matrix(),
+                      X_BE.translation())
+                self._compiled = CompiledTracking(tree, model.plant.num_positions(), ee,
+                                                  self.task)
         except UnsupportedTree:
-            self._compiled = None
+            pass
+        if self._compiled is None:
             self._dynamics = DecoupledDynamics(model.plant, model.base_body)
             self._context = model.plant.CreateDefaultContext()
 

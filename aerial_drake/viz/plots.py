@@ -16,10 +16,13 @@ effector orange (the windows of every run's scenario, each once). :func:`series`
 labels any number of runs for Figs. 3-5 (``aerial-drake plot``, :mod:`aerial_drake.viz.run_plots`).
 
 Nothing is recomputed from the model: the actual CoM and end-effector positions are the
-reference plus the controller's logged errors (``x_tilde = x_g - x_d``,
-``y_tilde[:3] = p_E - p_ed``, see :data:`aerial_drake.control.law.DIAGNOSTICS_LAYOUT`), which is
-exact, and the orientation errors are the logged angles. Rendering uses Matplotlib's Agg
-canvas directly (no pyplot, no global backend switch), so it works without a display.
+reference plus the logged tracking errors (``x_tilde = x_g - x_d``, ``y_tilde[:3] = p_E -
+p_ed``, :mod:`aerial_drake.simulation.tracking`; :class:`~aerial_drake.viz.run_data.Run`),
+which is exact, and the orientation errors are the logged angles: the end effector's from the
+tracking errors, the base's (against the attitude the controller commands) from the
+controller's diagnostics, drawn for the runs whose controller reports it. Rendering uses
+Matplotlib's Agg canvas directly (no pyplot, no global backend switch), so it works without a
+display.
 
 Command line: ``python -m aerial_drake.viz.plots NOMINAL_DIR [DISTURBED_DIR] [--out DIR]``.
 """
@@ -28,9 +31,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import sys
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -39,10 +40,9 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from aerial_drake.control.law import diagnostics_slices, task_size_of_diagnostics
 from aerial_drake.simulation.metrics import input_names
-from aerial_drake.simulation.scenarios import Scenario, load_scenario
-from aerial_drake.trajectories.reference import unpack_com_reference, unpack_task_reference
+from aerial_drake.simulation.scenarios import Scenario
+from aerial_drake.viz.run_data import Run, load_run
 
 FIGURE_NAMES = ("fig3_end_effector", "fig4_com", "fig5_orientation_errors", "fig6_inputs")
 FORMATS = ("png", "pdf")
@@ -57,61 +57,6 @@ WINDOW_LABELS = {"helicopter": "force on the vehicle",
 JOINT_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown",
                 "tab:pink")
 DPI = 120
-
-
-@dataclass(frozen=True)
-class Run:
-    """One run folder, loaded."""
-
-    name: str
-    log: dict[str, np.ndarray]
-    scenario: Scenario
-    metrics: dict
-
-    @property
-    def t(self) -> np.ndarray:
-        return self.log["t"]
-
-    def diagnostic(self, name: str) -> np.ndarray:
-        """A diagnostics entry over time, (N, size), using the layout stored in the log."""
-        return self.log["diagnostics"][:, _diagnostics_slices(self.log)[name]]
-
-    def com(self) -> tuple[np.ndarray, np.ndarray]:
-        """(desired, actual) CoM positions (N, 3) in World (m): x_d and x_d + x_tilde."""
-        x_d = unpack_com_reference(self.log["com_reference"])[:, 0]
-        return x_d, x_d + self.diagnostic("x_tilde")
-
-    def end_effector(self) -> tuple[np.ndarray, np.ndarray]:
-        """(desired, actual) end-effector positions (N, 3) in World (m): p_ed and
-        p_ed + y_tilde[:3]."""
-        p_ed = unpack_task_reference(self.log["task_reference"]).p_ed
-        return p_ed, p_ed + self.diagnostic("y_tilde")[:, :3]
-
-    def input_limits(self) -> dict[str, tuple[float | None, float | None]]:
-        """``{input: (lower, upper)}`` from metrics.json (None: unbounded); empty if absent."""
-        return {k: tuple(v) for k, v in self.metrics.get("input_limits", {}).items()}
-
-
-def _diagnostics_slices(log: dict) -> dict[str, slice]:
-    """The diagnostics layout a log was written with (this version's if it has none)."""
-    if "layout" not in log:
-        return diagnostics_slices(task_size_of_diagnostics(log["diagnostics"].shape[1]))
-    return diagnostics_slices(json.loads(str(log["layout"]))["diagnostics"])
-
-
-def load_run(folder: str | Path) -> Run:
-    """Load ``log.npz``, ``metrics.json`` and ``scenario.yaml`` from a run folder."""
-    folder = Path(folder)
-    missing = [f for f in ("log.npz", "metrics.json", "scenario.yaml")
-               if not (folder / f).is_file()]
-    if missing:
-        raise FileNotFoundError(f"{folder} is not a complete run folder: missing {missing} "
-                                "(write one with `aerial-drake run SCENARIO`)")
-    with np.load(folder / "log.npz") as data:
-        log = {k: data[k] for k in data.files}
-    metrics = json.loads((folder / "metrics.json").read_text())
-    scenario = load_scenario(folder / "scenario.yaml")
-    return Run(name=scenario.name, log=log, scenario=scenario, metrics=metrics)
 
 
 # --- Figure helpers -------------------------------------------------------------------------
@@ -264,9 +209,10 @@ def figure_orientation_errors(nominal: Run | list[Series],
     runs = _as_series(nominal, disturbed)
     fig, axes = _new_figure(2, 6.0)
     for run, color, _ in runs:
-        axes[0].plot(run.t, run.diagnostic("base_attitude_error")[:, 0], color=color,
-                     linewidth=1.2)
-        axes[1].plot(run.t, run.diagnostic("ee_orientation_error")[:, 0], color=color,
+        base = run.diagnostic("base_attitude_error")  # the controller's (None: not reported)
+        if base is not None:
+            axes[0].plot(run.t, base[:, 0], color=color, linewidth=1.2)
+        axes[1].plot(run.t, run.tracking("ee_orientation_error")[:, 0], color=color,
                      linewidth=1.2)
     axes[0].set_ylabel("base attitude error\nangle of $R_d^T R_b$ (rad)")
     axes[1].set_ylabel("end-effector orientation error\nangle of $R_E R_{ed}^T$ (rad)")
