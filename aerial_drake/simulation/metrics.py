@@ -24,7 +24,6 @@ _ERRORS = {
     "ee_orientation_error_rad": "ee_orientation_error",
     "com_position_error_m": "com_error",
     "base_attitude_error_rad": "base_attitude_error",
-    "heading_error_rad": "heading_error",
 }
 
 
@@ -84,6 +83,8 @@ def compute_metrics(t: np.ndarray, entries: Mapping[str, np.ndarray], applied: n
         # None when nothing was logged (a run stopped at t = 0).
         "min_sigma_min_J3": _min_or_none(entries.get("sigma_min_J3")),
         "min_f_d_norm_N": _min_or_none(entries.get("f_d_norm")),
+        # Over the run (the phases keep the keys they had before the tracking errors).
+        "heading_error_rad": _rms_and_max(entries.get("heading_error")),
     }
 
 
@@ -157,12 +158,13 @@ def limits_by_input(lower: np.ndarray, upper: np.ndarray) -> dict:
     return {name: [finite(lo), finite(hi)] for name, lo, hi in zip(names, lower, upper)}
 
 
-def _rms_and_max(x: np.ndarray | None, mask: np.ndarray) -> dict | None:
-    """RMS and max of the entry ``x`` (N, 1) at ``mask``; None for an entry not reported."""
+def _rms_and_max(x: np.ndarray | None, mask: np.ndarray | None = None) -> dict | None:
+    """RMS and max of the entry ``x`` (N, 1) (at ``mask``); None for an entry not reported
+    or nothing logged."""
     if x is None:
         return None
-    e = x[mask][:, 0]
-    return {"rms": float(np.sqrt(np.mean(e ** 2))), "max": float(e.max())}
+    e = (x if mask is None else x[mask])[:, 0]
+    return {"rms": float(np.sqrt(np.mean(e ** 2))), "max": float(e.max())} if e.size else None
 
 
 def _min_or_none(x: np.ndarray | None, mask: np.ndarray | None = None) -> float | None:

@@ -155,12 +155,18 @@ def test_metrics_of_a_controller_without_its_own_entries(synthetic):
     t, d, applied, lower, upper = synthetic
     tracking = {k: v for k, v in named(d).items()
                 if k not in ("base_attitude_error", "f_d_norm", "V", "e_R")}
+    tracking["heading_error"] = np.full((t.size, 1), 0.5)
+    tracking["heading_error"][7] = 2.0
     m = dut.compute_metrics(t, tracking, applied, lower, upper, [0.0, 1.0, 2.0], DT)
     p1, p2 = m["phases"]
     assert p1["base_attitude_error_rad"] is None and p1["min_f_d_norm_N"] is None
     assert m["min_f_d_norm_N"] is None and m["min_sigma_min_J3"] == 0.2
     assert p1["ee_position_error_m"]["max"] == 7.0 and p2["min_sigma_min_J3"] == 0.2
-    assert p1["heading_error_rad"] is None  # (the synthetic log has none)
+    # Over the run: twenty 0.5 and one 2: RMS sqrt((20 * 0.25 + 4) / 21) = sqrt(9 / 21).
+    assert m["heading_error_rad"]["rms"] == pytest.approx(math.sqrt(9.0 / 21.0), rel=1e-12)
+    assert m["heading_error_rad"]["max"] == 2.0
+    assert dut.compute_metrics(t, named(d), applied, lower, upper, [0.0, 2.0],
+                               DT)["heading_error_rad"] is None  # (not in the log)
 
 
 # --- disturbance_response ---------------------------------------------------------------------
@@ -177,7 +183,8 @@ def test_disturbance_response_windows_and_ratio():
     t, d = response_log(
         peaks_ee={4.5: 0.002, 5.9: 0.003, 6.1: 0.5, 10.8: 0.2, 11.2: 0.9},
         peaks_com={3.9: 0.4, 5.2: 0.1, 9.5: 0.05, 12.0: 1.0})
-    out = dut.disturbance_response(t, named(d), [("helicopter", 4.0, 5.0), ("end_effector", 9.0, 10.0)])
+    out = dut.disturbance_response(t, named(d), [("helicopter", 4.0, 5.0),
+                                                 ("end_effector", 9.0, 10.0)])
     heli, ee = out
     # Helicopter: [4, 5 + 1] s: ee peaks 0.002 (4.5), 0.003 (5.9); 0.5 at 6.1 is outside.
     # CoM: 0.1 (5.2); 0.4 at 3.9 is before the window. Ratio 0.003 / 0.1 = 0.03.
@@ -195,7 +202,8 @@ def test_disturbance_response_windows_and_ratio():
 def test_disturbance_response_is_cut_at_the_next_window():
     t, d = response_log(peaks_ee={1.5: 0.1, 2.6: 0.7}, peaks_com={1.2: 0.2, 2.7: 0.9},
                         duration=5.0)
-    a, b = dut.disturbance_response(t, named(d), [("end_effector", 2.5, 3.0), ("helicopter", 1.0, 2.0)])
+    a, b = dut.disturbance_response(t, named(d), [("end_effector", 2.5, 3.0),
+                                                  ("helicopter", 1.0, 2.0)])
     # Window (1, 2) s ends at min(2 + 1, 2.5) = 2.5 s: the peaks at 2.6 / 2.7 are b's only.
     assert b["evaluated_s"] == [1.0, 2.5]
     assert (b["ee_position_error_peak_m"], b["com_error_peak_m"]) == (0.1, 0.2)
