@@ -3,7 +3,11 @@
 :func:`_decompose` computes every quantity of
 :class:`~aerial_drake.dynamics.decoupling.Decomposition` and :func:`_law` the law of
 :func:`aerial_drake.control.law.compute_control`, with the same formulas in the same order as
-the numpy code; :mod:`aerial_drake.control.compiled.law` holds the Python entry points.
+the numpy code; :func:`_tracking` the tracking errors of a batch of states
+(:mod:`aerial_drake.simulation.tracking`) with :func:`_law`'s statements for them, so equal
+to its diagnostics to the bit (and in this file for the same cache reason as below: it must
+recompile whenever Section II or the law's kinematics change);
+:mod:`aerial_drake.control.compiled.law` holds the Python entry points.
 
 Why this module is longer than the others (some 770 lines): Section II and the law are one
 compile unit. The law's workspace nests Section II's (:func:`_law_buffers` lays out
