@@ -14,7 +14,9 @@ Output ports:
     - ``command``: ``[f, mu (3), tau (n)]``, thrust along body z (N), body torques (N m, base
       frame), joint torques (N m): the inputs of (1).
     - ``diagnostics``: :func:`aerial_drake.control.law.diagnostics_layout`. The metrics read
-      the error entries, so every controller fills them with the same definitions
+      the errors from the run's tracking errors (:mod:`aerial_drake.simulation.tracking`, of
+      the plant's state) and only ``base_attitude_error`` and ``f_d_norm`` from here, by
+      name; every controller fills the error entries with the same definitions
       (:func:`error_diagnostics`): ``x_tilde = x_g - x_d`` (system CoM), ``y_tilde`` of
       :func:`aerial_drake.control.law.task_error`, ``com_error = |x_tilde|``,
       ``ee_position_error = |p_E - p_ed|``, ``ee_orientation_error`` = angle of

@@ -1,12 +1,17 @@
-"""Metrics of a run, per phase, from its logs (the keys are documented in the README)."""
+"""Metrics of a run, per phase, from its logs (the keys are documented in the README).
+
+The errors and margins come from named entries (``{name: (N, size) array}``): the run's
+tracking errors (:mod:`aerial_drake.simulation.tracking`), and the controller's own
+quantities from its diagnostics where it reports them by those names (``base_attitude_error``
+against the attitude it commands, ``f_d_norm``); a metric of an entry the controller does not
+report is None.
+"""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Mapping
 
 import numpy as np
-
-from aerial_drake.control.law import diagnostics_slices, task_size_of_diagnostics
 
 
 def input_names(n: int) -> tuple[str, ...]:
@@ -14,7 +19,7 @@ def input_names(n: int) -> tuple[str, ...]:
     return ("thrust", "mu_x", "mu_y", "mu_z") + tuple(f"tau_{i}" for i in range(1, n + 1))
 
 _ERRORS = {
-    # metric name -> diagnostics entry
+    # metric name -> entry (the tracking errors', but base_attitude_error: the controller's)
     "ee_position_error_m": "ee_position_error",
     "ee_orientation_error_rad": "ee_orientation_error",
     "com_position_error_m": "com_error",
@@ -38,18 +43,19 @@ def phase_edges(disturbance_windows: list[tuple[float, float]], duration: float)
     return [0.0] + inner + [duration]
 
 
-def compute_metrics(t: np.ndarray, diagnostics: np.ndarray, applied: np.ndarray,
+def compute_metrics(t: np.ndarray, entries: Mapping[str, np.ndarray], applied: np.ndarray,
                     lower: np.ndarray, upper: np.ndarray, edges: list[float],
                     log_period: float, saturation_grace: float = SATURATION_GRACE_S) -> dict:
     """Per-phase RMS/max errors, assumption margins and saturated time.
 
     Args:
-        t: sample times (N); diagnostics: (N, 23 + 2 n); applied: (N, 4 + n) inputs that
+        t: sample times (N); entries: ``{name: (N, size)}``, the tracking errors and the
+        controller's ``base_attitude_error`` and ``f_d_norm`` if it reports them (module
+        docstring; a metric of a missing entry is None); applied: (N, 4 + n) inputs that
         reached the plant; lower/upper: (4 + n) input limits; edges: phase boundaries (s).
         saturation_grace: the saturated time after this instant is reported separately, as
         the paper allows saturation only in a short initial interval.
     """
-    sl = diagnostics_slices(task_size_of_diagnostics(diagnostics.shape[1]))
     names = input_names(applied.shape[1] - 4)
     bounds = np.abs(np.concatenate([lower, upper]))
     tol = 1e-9 * max(1.0, bounds[np.isfinite(bounds)].max(initial=1.0))
@@ -60,11 +66,10 @@ def compute_metrics(t: np.ndarray, diagnostics: np.ndarray, applied: np.ndarray,
         mask = (t >= a) & ((t <= b) if last else (t < b))
         phase: dict[str, Any] = {"start_s": a, "end_s": b, "samples": int(mask.sum())}
         if mask.any():
-            for key, diag in _ERRORS.items():
-                e = diagnostics[mask, sl[diag]][:, 0]
-                phase[key] = {"rms": float(np.sqrt(np.mean(e ** 2))), "max": float(e.max())}
-            phase["min_sigma_min_J3"] = float(diagnostics[mask, sl["sigma_min_J3"]].min())
-            phase["min_f_d_norm_N"] = float(diagnostics[mask, sl["f_d_norm"]].min())
+            for key, name in _ERRORS.items():
+                phase[key] = _rms_and_max(entries.get(name), mask)
+            phase["min_sigma_min_J3"] = _min_or_none(entries.get("sigma_min_J3"), mask)
+            phase["min_f_d_norm_N"] = _min_or_none(entries.get("f_d_norm"), mask)
             phase["saturated_s"] = dict(zip(names,
                                             (at_limit[mask].sum(axis=0) * log_period).tolist()))
         phases.append(phase)
@@ -76,8 +81,10 @@ def compute_metrics(t: np.ndarray, diagnostics: np.ndarray, applied: np.ndarray,
         saturated_after_key(saturation_grace): dict(
             zip(names, (at_limit[late].sum(axis=0) * log_period).tolist())),
         # None when nothing was logged (a run stopped at t = 0).
-        "min_sigma_min_J3": _min_or_none(diagnostics[:, sl["sigma_min_J3"]]),
-        "min_f_d_norm_N": _min_or_none(diagnostics[:, sl["f_d_norm"]]),
+        "min_sigma_min_J3": _min_or_none(entries.get("sigma_min_J3")),
+        "min_f_d_norm_N": _min_or_none(entries.get("f_d_norm")),
+        # Over the run (the phases keep the keys they had before the tracking errors).
+        "heading_error_rad": _rms_and_max(entries.get("heading_error")),
     }
 
 
@@ -87,7 +94,7 @@ def compute_metrics(t: np.ndarray, diagnostics: np.ndarray, applied: np.ndarray,
 RESPONSE_TAIL_S = 1.0
 
 
-def disturbance_response(t: np.ndarray, diagnostics: np.ndarray,
+def disturbance_response(t: np.ndarray, entries: Mapping[str, np.ndarray],
                          windows: list[tuple[str, float, float]],
                          tail: float = RESPONSE_TAIL_S) -> list[dict]:
     """Peak end-effector and CoM position errors in each disturbance's response.
@@ -96,11 +103,11 @@ def disturbance_response(t: np.ndarray, diagnostics: np.ndarray,
     ``[start, stop + tail]``, cut at the next window's start (so one response does not see the
     next disturbance). ``ee_to_com_peak_ratio`` tests the paper's claim that a force on the
     helicopter barely moves the end effector (Fig. 3 against Fig. 4). Peaks are None when the
-    log does not reach the window.
+    log does not reach the window. ``entries``: the tracking errors by name (``{name: (N,
+    size)}``, :mod:`aerial_drake.simulation.tracking`).
     """
-    sl = diagnostics_slices(task_size_of_diagnostics(diagnostics.shape[1]))
-    ee = diagnostics[:, sl["ee_position_error"]][:, 0]
-    com = diagnostics[:, sl["com_error"]][:, 0]
+    ee = entries["ee_position_error"][:, 0]
+    com = entries["com_error"][:, 0]
     starts = sorted(s for _, s, _ in windows)
     out = []
     for target, start, stop in windows:
@@ -151,5 +158,19 @@ def limits_by_input(lower: np.ndarray, upper: np.ndarray) -> dict:
     return {name: [finite(lo), finite(hi)] for name, lo, hi in zip(names, lower, upper)}
 
 
-def _min_or_none(x: np.ndarray) -> float | None:
+def _rms_and_max(x: np.ndarray | None, mask: np.ndarray | None = None) -> dict | None:
+    """RMS and max of the entry ``x`` (N, 1) (at ``mask``); None for an entry not reported
+    or nothing logged."""
+    if x is None:
+        return None
+    e = (x if mask is None else x[mask])[:, 0]
+    return {"rms": float(np.sqrt(np.mean(e ** 2))), "max": float(e.max())} if e.size else None
+
+
+def _min_or_none(x: np.ndarray | None, mask: np.ndarray | None = None) -> float | None:
+    """The least value of the entry ``x`` (at ``mask``); None for an entry not reported or
+    nothing logged (a run stopped at t = 0)."""
+    if x is None:
+        return None
+    x = x if mask is None else x[mask]
     return float(x.min()) if x.size else None

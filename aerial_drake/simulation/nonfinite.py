@@ -24,9 +24,13 @@ CHECKED_SIGNALS = ("plant_state", "command", "applied_command", "diagnostics",
 
 def _checked(name: str, values: np.ndarray) -> np.ndarray:
     """The part of a signal that must be finite: all of it, but for the diagnostics only the
-    entries every controller fills (control.interface: a baseline leaves others NaN)."""
+    entries every controller of the paper law's layout fills (control.interface: a baseline
+    leaves others NaN), and none of a controller's own other layout."""
     if name == "diagnostics":
-        n = task_size_of_diagnostics(values.shape[-1])
+        try:
+            n = task_size_of_diagnostics(values.shape[-1])
+        except ValueError:  # not the paper law's layout: the controller's own quantities
+            return values[..., :0]
         return values[..., required_diagnostics_columns(n)]
     return values
 

@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import json
 import signal
 import sys
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, TextIO
 
@@ -16,22 +15,14 @@ from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import Context
-from pydrake.systems.primitives import VectorLogSink
 
 from aerial_drake.control.compiled import compile_law
-from aerial_drake.control.law import AssumptionViolation, diagnostics_layout
+from aerial_drake.control.law import AssumptionViolation
 from aerial_drake.simulation.controllers import ControllerFactory
-from aerial_drake.simulation.diagram import ClosedLoop, build_simulation, input_limits
+from aerial_drake.simulation.diagram import ClosedLoop, build_simulation
 from aerial_drake.simulation.disturbances import resolve_random_disturbances
 from aerial_drake.simulation.feasibility import check_reference, check_start_posture
 from aerial_drake.simulation.interrupts import deferred, handling, signal_name
-from aerial_drake.simulation.metrics import (
-    compute_metrics,
-    disturbance_response,
-    limits_by_input,
-    phase_edges,
-    rotor_metrics,
-)
 from aerial_drake.simulation.nonfinite import (
     SIGNAL_MEANING,
     first_non_finite_output,
@@ -46,12 +37,16 @@ from aerial_drake.simulation.outputs import (
 )
 from aerial_drake.simulation.perturbations import start_perturbations
 from aerial_drake.simulation.reference_pose import reference_configuration
+from aerial_drake.simulation.run_log import (
+    collect_log,
+    controller_period,
+    layout_json,
+    run_metrics,
+)
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
 from aerial_drake.simulation.scenarios.checks import REALTIME, estimated_log_mb, number
+from aerial_drake.simulation.tracking import Layout
 from aerial_drake.trajectories.paper import compile_reference
-
-#: Diagnostics entries that do not depend on the task's size (diagnostics_layout(0)).
-_BASE_DIAGNOSTICS = sum(size for _, size in diagnostics_layout(0))
 
 
 class SimulationFailed(RuntimeError):
@@ -86,6 +81,9 @@ class RunResult:
     out_dir: Path | None = None
     #: One name per task row (robots.task.TaskLayout.labels), stored with the log's layout.
     task_labels: tuple[str, ...] = ()
+    #: The (name, size) pairs of the logged vectors ``diagnostics`` (the controller's) and
+    #: ``tracking`` (simulation.tracking), by array name; stored in log.npz's ``layout``.
+    layouts: dict[str, Layout] = field(default_factory=dict)
 
 
 def set_initial_state(scenario: Scenario, loop: ClosedLoop, plant_context: Context) -> None:
@@ -112,18 +110,12 @@ def _prime_held_inputs(loop: ClosedLoop, context: Context) -> None:
     no step."""
     controller = loop.controller
     controller_context = controller.GetMyMutableContextFromRoot(context)
-    if _period(controller) > 0:
+    if controller_period(controller) > 0:
         controller.hold_sample(controller_context)
     if loop.lag is not None:
         cmd = controller.GetOutputPort("command").Eval(controller_context)
         loop.lag.set_initial_output_value(loop.lag.GetMyMutableContextFromRoot(context),
                                           cmd[:4])
-
-
-def _period(controller) -> float:
-    """A controller's sampling period (s); 0 (continuous) for a system without ``period``
-    (aerial_drake.control.interface)."""
-    return float(getattr(controller, "period", 0.0))
 
 
 def _is_terminal(stream) -> bool:
@@ -207,51 +199,6 @@ def _simulate(simulator: Simulator, loop: ClosedLoop, pauses: list[float],
         interrupted = getattr(err, "signum", signal.SIGINT)
         failure = f"interrupted ({signal_name(interrupted)}) at t = {time_now:.3f} s"
     return failure, interrupted, time.perf_counter() - start
-
-
-def _collect_log(scenario: Scenario, loop: ClosedLoop, loggers: dict[str, VectorLogSink],
-                 context: Context) -> dict[str, np.ndarray]:
-    """The loggers' samples as ``{"t": times, port: (samples, size)}``, cut to a common
-    length, with the references at the sample times (what the reference ports gave there)
-    and, for a sampled controller, the diagnostics re-aligned to their sample times."""
-    log = {port: logger.FindLog(context) for port, logger in loggers.items()}
-    arrays = {"t": log["plant_state"].sample_times()}
-    for port, entry in log.items():
-        arrays[port] = entry.data().T
-    n = min(len(v) for v in arrays.values())
-    arrays = {k: v[:n] for k, v in arrays.items()}
-    references = loop.reference.source.sample(arrays["t"]).to_vectors()
-    arrays.update(zip(("com_reference", "task_reference", "heading_reference"), references))
-    if _period(loop.controller) > 0 and n > 0:
-        arrays = _align_held_diagnostics(arrays, loop)
-    return arrays
-
-
-def _align_held_diagnostics(arrays: dict[str, np.ndarray], loop: ClosedLoop,
-                            ) -> dict[str, np.ndarray]:
-    """Each sample's diagnostics at its own time.
-
-    A sampled controller holds the diagnostics of its sample at t_k with the command, and the
-    loggers publish at t_k before the update at t_k: the logged row k holds the diagnostics of
-    t_k-1 (row 0, the primed hold, those of t_0). So row k is taken from logged row k+1, and
-    the last row's from the law at the last logged state and references (what the update at
-    that time computes, to the last bit). Where the law refuses that state: an assumption
-    violated, the run stopped there, so the row goes (as a failed sample logs nothing); a
-    non-finite state, the row stays with NaN diagnostics (the run is cut at that sample).
-    """
-    held = arrays["diagnostics"]
-    x = arrays["plant_state"][-1][loop.simulated_plant.rigid_state_indices]
-    try:
-        last = loop.controller.evaluate(x, *(arrays[k][-1] for k in (
-            "com_reference", "task_reference", "heading_reference")))[1]
-    except FloatingPointError:
-        last = np.full(held.shape[1], np.nan)
-    except AssumptionViolation:
-        arrays = {k: v[:-1] for k, v in arrays.items()}
-        arrays["diagnostics"] = held[1:]
-        return arrays
-    arrays["diagnostics"] = np.vstack([held[1:], last])
-    return arrays
 
 
 def _cut_at_divergence(arrays: dict[str, np.ndarray], index: int, signal_name: str,
@@ -361,7 +308,7 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
     with deferred() as held:
         if progress and _is_terminal(stream):
             stream.write("\n")  # end the self-rewriting progress line
-        arrays = _collect_log(scenario, loop, loggers, context)
+        arrays, layouts = collect_log(scenario, loop, loggers, context)
         sim_time = float(context.get_time())
         diverged = first_non_finite_sample(arrays)
         if diverged is not None:
@@ -374,9 +321,9 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
             failure = (f"t = {sim_time:.4f} s: {what} (first non-finite signal: "
                        f"'{bad or 'unknown'}'); Drake: {failure.split(': ', 1)[-1]}; "
                        f"{likely_cause(scenario)}")
-        metrics = _metrics(scenario, loop, arrays, wall, sim_time)
+        metrics = run_metrics(scenario, loop, arrays, layouts, wall, sim_time)
         result = RunResult(scenario=scenario, log=arrays, metrics=metrics, wall_time_s=wall,
-                           completed=failure is None, failure=failure)
+                           completed=failure is None, failure=failure, layouts=layouts)
         extra = extra_files() if extra_files is not None else {}
         if lock is not None:
             result.out_dir = write_outputs(result, lock.folder, extra)
@@ -406,33 +353,6 @@ def _note_replaced_results(scenario: Scenario, folder: Path, stream: TextIO) -> 
                      "scenario another name: or another --out\n")
 
 
-def _metrics(scenario: Scenario, loop: ClosedLoop, log: dict, wall: float,
-             sim_time: float) -> dict:
-    lower, upper = input_limits(scenario, loop.controller_model)
-    windows = [(d.start, d.stop) for d in scenario.disturbances]
-    edges = phase_edges(windows, scenario.duration)
-    metrics = compute_metrics(log["t"], log["diagnostics"], log["applied_command"], lower,
-                              upper, edges, scenario.log_period)
-    metrics.update({
-        "scenario": scenario.name,
-        "simulated_time_s": sim_time,
-        "wall_time_s": wall,
-        "real_time_factor": sim_time / wall if wall > 0 else None,
-        "controller_evaluations": getattr(loop.controller, "evaluations", None),
-        "input_limits": limits_by_input(lower, upper),
-        "disturbance_response": disturbance_response(
-            log["t"], log["diagnostics"],
-            [(d.target, d.start, d.stop) for d in scenario.disturbances]),
-    })
-    sim = loop.simulated_plant
-    if sim.rotor_joints and "rotor_drive_torque" in log:
-        nq = sim.plant.num_positions()
-        metrics["rotors"] = rotor_metrics(
-            log["plant_state"][:, nq + sim.rotor_velocity_indices], log["rotor_drive_torque"],
-            scenario.rotors.speed * np.array(sim.rotor_directions))
-    return metrics
-
-
 def write_outputs(result: RunResult, out_dir: str | Path,
                   extra: dict[str, str] | None = None) -> Path:
     """Write the run's files, and ``extra`` ``{name: text}`` ones, into ``out_dir``
@@ -441,10 +361,7 @@ def write_outputs(result: RunResult, out_dir: str | Path,
     leaves none of them (OutputError)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    n = (result.log["diagnostics"].shape[1] - _BASE_DIAGNOSTICS) // 2 \
-        if "diagnostics" in result.log else 0
-    names = json.dumps({"diagnostics": [list(x) for x in diagnostics_layout(n)],
-                        "task": list(result.task_labels)})
+    names = layout_json(result.layouts, result.task_labels)
     arrays: dict[str, Any] = dict(result.log)  # (typed Any: numpy's stub has a bool keyword)
     metrics = dict(result.metrics)
     metrics["completed"] = result.completed

@@ -11,8 +11,9 @@ quaternion stays a unit quaternion; added to the angles of a roll-pitch-yaw base
 angles, base angular and linear velocity, joint rates. Sizes come from the model, so any arm
 gets the same treatment.
 
-The controller's diagnostics (the logged errors) are computed on what it measures, so with
-noise they include it; the plant's logged state is the true one.
+The controller's diagnostics are computed on what it measures, so with noise they include
+it; the plant's logged state is the true one, and so are the log's tracking errors and the
+metrics read from them (:mod:`aerial_drake.simulation.tracking`).
 """
 
 from __future__ import annotations

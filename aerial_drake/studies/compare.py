@@ -179,10 +179,10 @@ def disturbance_displacement(disturbed: Run, undisturbed: Run,
     t = disturbed.t[:n]
     if not np.array_equal(t, undisturbed.t[:n]):
         raise ValueError("the two runs are not sampled at the same times")
-    ee = np.linalg.norm(disturbed.diagnostic("y_tilde")[:n, :3]
-                        - undisturbed.diagnostic("y_tilde")[:n, :3], axis=1)
-    com = np.linalg.norm(disturbed.diagnostic("x_tilde")[:n]
-                         - undisturbed.diagnostic("x_tilde")[:n], axis=1)
+    ee = np.linalg.norm(disturbed.tracking("y_tilde")[:n, :3]
+                        - undisturbed.tracking("y_tilde")[:n, :3], axis=1)
+    com = np.linalg.norm(disturbed.tracking("x_tilde")[:n]
+                         - undisturbed.tracking("x_tilde")[:n], axis=1)
     out = []
     for a, b in windows:
         mask = (t >= a) & (t <= b)

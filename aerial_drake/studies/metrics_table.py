@@ -35,7 +35,7 @@ def flatten_metrics(metrics: dict) -> dict[str, float | None]:
     for k, phase in enumerate(metrics.get("phases", [])):
         for name in PHASE_ERRORS:
             for stat in ("rms", "max"):
-                flat[f"phase{k}.{name}.{stat}"] = _number(phase.get(name, {}).get(stat))
+                flat[f"phase{k}.{name}.{stat}"] = _number((phase.get(name) or {}).get(stat))
         for name in PHASE_SCALARS:
             flat[f"phase{k}.{name}"] = _number(phase.get(name))
     for w, window in enumerate(metrics.get("disturbance_response", [])):

@@ -18,10 +18,13 @@ effector orange (the windows of every run's scenario, each once). :func:`series`
 labels any number of runs for Figs. 3-5 (``aerial-drake plot``, :mod:`aerial_drake.viz.run_plots`).
 
 Nothing is recomputed from the model: the actual CoM and end-effector positions are the
-reference plus the controller's logged errors (``x_tilde = x_g - x_d``,
-``y_tilde[:3] = p_E - p_ed``, see :data:`aerial_drake.control.law.DIAGNOSTICS_LAYOUT`), which is
-exact, and the orientation errors are the logged angles. Rendering uses Matplotlib's Agg
-canvas directly (no pyplot, no global backend switch), so it works without a display.
+reference plus the logged tracking errors (``x_tilde = x_g - x_d``, ``y_tilde[:3] = p_E -
+p_ed``, :mod:`aerial_drake.simulation.tracking`; :class:`~aerial_drake.simulation.run_folder.Run`),
+which is exact, and the orientation errors are the logged angles: the end effector's from the
+tracking errors, the base's (against the attitude the controller commands) from the
+controller's diagnostics, drawn for the runs whose controller reports it. Rendering uses
+Matplotlib's Agg canvas directly (no pyplot, no global backend switch), so it works without a
+display.
 
 Command line: ``python -m aerial_drake.viz.plots NOMINAL_DIR [DISTURBED_DIR] [--out DIR]``.
 """
@@ -208,9 +211,10 @@ def figure_orientation_errors(nominal: Run | list[Series],
     runs = _as_series(nominal, disturbed)
     fig, axes = _new_figure(2, 6.0)
     for run, color, _ in runs:
-        axes[0].plot(run.t, run.diagnostic("base_attitude_error")[:, 0], color=color,
-                     linewidth=1.2)
-        axes[1].plot(run.t, run.diagnostic("ee_orientation_error")[:, 0], color=color,
+        base = run.diagnostic("base_attitude_error")  # the controller's (None: not reported)
+        if base is not None:
+            axes[0].plot(run.t, base[:, 0], color=color, linewidth=1.2)
+        axes[1].plot(run.t, run.tracking("ee_orientation_error")[:, 0], color=color,
                      linewidth=1.2)
     axes[0].set_ylabel("base attitude error\nangle of $R_d^T R_b$ (rad)")
     axes[1].set_ylabel("end-effector orientation error\nangle of $R_E R_{ed}^T$ (rad)")

@@ -15,17 +15,24 @@ import math
 import numpy as np
 import pytest
 
-from aerial_drake.control.law import diagnostics_size, diagnostics_slices
+from aerial_drake.control.law import diagnostics_layout, diagnostics_size, diagnostics_slices
 from aerial_drake.robots.models import make_plant, nominal_end_effector_offset
 from aerial_drake.simulation import metrics as dut
 from aerial_drake.simulation.feasibility import check_workspace
 from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
+from aerial_drake.simulation.tracking import entries
 
 N_TASK = 7  # the paper's task: end-effector pose and q3 (seven arm joints)
 SL = diagnostics_slices(N_TASK)
 DIAGNOSTICS_SIZE = diagnostics_size(N_TASK)
 INPUT_NAMES = dut.input_names(N_TASK)
 DT = 0.1
+
+
+def named(d):
+    """The synthetic log ``d`` (the paper law's diagnostics layout) by entry name: what the
+    runner gives the metrics (its tracking errors and the controller's entries)."""
+    return entries(d, diagnostics_layout(N_TASK))
 
 
 def test_input_names_of_the_papers_robot():
@@ -83,7 +90,7 @@ def synthetic():
 
 def test_compute_metrics_per_phase(synthetic):
     t, d, applied, lower, upper = synthetic
-    m = dut.compute_metrics(t, d, applied, lower, upper, [0.0, 1.0, 2.0], DT)
+    m = dut.compute_metrics(t, named(d), applied, lower, upper, [0.0, 1.0, 2.0], DT)
     p1, p2 = m["phases"]
     assert (p1["start_s"], p1["end_s"], p1["samples"]) == (0.0, 1.0, 10)
     assert (p2["start_s"], p2["end_s"], p2["samples"]) == (1.0, 2.0, 11)
@@ -110,7 +117,7 @@ def test_compute_metrics_per_phase(synthetic):
 
 def test_saturated_time(synthetic):
     t, d, applied, lower, upper = synthetic
-    m = dut.compute_metrics(t, d, applied, lower, upper, [0.0, 1.0, 2.0], DT)
+    m = dut.compute_metrics(t, named(d), applied, lower, upper, [0.0, 1.0, 2.0], DT)
     p1, p2 = m["phases"]
     after = m[dut.saturated_after_key()]
     assert dut.saturated_after_key() == "saturated_s_after_0.5s"
@@ -125,21 +132,41 @@ def test_saturated_time(synthetic):
     assert after == pytest.approx({**zero, "thrust": 0.1, "mu_x": 0.2, "tau_1": 0.1,
                                    "tau_7": 0.1})
     # Another grace: after 0.65 s, mu_x keeps t = 0.7 only.
-    later = dut.compute_metrics(t, d, applied, lower, upper, [0.0, 2.0], DT,
+    later = dut.compute_metrics(t, named(d), applied, lower, upper, [0.0, 2.0], DT,
                                 saturation_grace=0.65)
     assert later["saturated_s_after_0.65s"]["mu_x"] == pytest.approx(0.1)
     # Without limits (a scenario that does not saturate) nothing is saturated.
     inf = np.full(11, np.inf)
-    free = dut.compute_metrics(t, d, applied, -inf, inf, [0.0, 2.0], DT)
+    free = dut.compute_metrics(t, named(d), applied, -inf, inf, [0.0, 2.0], DT)
     assert free["saturated_s_total"] == zero
 
 
 def test_metrics_of_an_empty_log():
     d = np.zeros((0, DIAGNOSTICS_SIZE))
-    m = dut.compute_metrics(np.zeros(0), d, np.zeros((0, 11)), np.zeros(11), np.ones(11),
+    m = dut.compute_metrics(np.zeros(0), named(d), np.zeros((0, 11)), np.zeros(11), np.ones(11),
                             [0.0, 1.0], DT)
     assert m["phases"] == [{"start_s": 0.0, "end_s": 1.0, "samples": 0}]
     assert m["min_sigma_min_J3"] is None and m["min_f_d_norm_N"] is None
+
+
+def test_metrics_of_a_controller_without_its_own_entries(synthetic):
+    """A controller that reports neither base_attitude_error nor f_d_norm: those metrics are
+    None, the errors and sigma_min (the tracking errors') as before; no KeyError."""
+    t, d, applied, lower, upper = synthetic
+    tracking = {k: v for k, v in named(d).items()
+                if k not in ("base_attitude_error", "f_d_norm", "V", "e_R")}
+    tracking["heading_error"] = np.full((t.size, 1), 0.5)
+    tracking["heading_error"][7] = 2.0
+    m = dut.compute_metrics(t, tracking, applied, lower, upper, [0.0, 1.0, 2.0], DT)
+    p1, p2 = m["phases"]
+    assert p1["base_attitude_error_rad"] is None and p1["min_f_d_norm_N"] is None
+    assert m["min_f_d_norm_N"] is None and m["min_sigma_min_J3"] == 0.2
+    assert p1["ee_position_error_m"]["max"] == 7.0 and p2["min_sigma_min_J3"] == 0.2
+    # Over the run: twenty 0.5 and one 2: RMS sqrt((20 * 0.25 + 4) / 21) = sqrt(9 / 21).
+    assert m["heading_error_rad"]["rms"] == pytest.approx(math.sqrt(9.0 / 21.0), rel=1e-12)
+    assert m["heading_error_rad"]["max"] == 2.0
+    assert dut.compute_metrics(t, named(d), applied, lower, upper, [0.0, 2.0],
+                               DT)["heading_error_rad"] is None  # (not in the log)
 
 
 # --- disturbance_response ---------------------------------------------------------------------
@@ -156,7 +183,8 @@ def test_disturbance_response_windows_and_ratio():
     t, d = response_log(
         peaks_ee={4.5: 0.002, 5.9: 0.003, 6.1: 0.5, 10.8: 0.2, 11.2: 0.9},
         peaks_com={3.9: 0.4, 5.2: 0.1, 9.5: 0.05, 12.0: 1.0})
-    out = dut.disturbance_response(t, d, [("helicopter", 4.0, 5.0), ("end_effector", 9.0, 10.0)])
+    out = dut.disturbance_response(t, named(d), [("helicopter", 4.0, 5.0),
+                                                 ("end_effector", 9.0, 10.0)])
     heli, ee = out
     # Helicopter: [4, 5 + 1] s: ee peaks 0.002 (4.5), 0.003 (5.9); 0.5 at 6.1 is outside.
     # CoM: 0.1 (5.2); 0.4 at 3.9 is before the window. Ratio 0.003 / 0.1 = 0.03.
@@ -174,7 +202,8 @@ def test_disturbance_response_windows_and_ratio():
 def test_disturbance_response_is_cut_at_the_next_window():
     t, d = response_log(peaks_ee={1.5: 0.1, 2.6: 0.7}, peaks_com={1.2: 0.2, 2.7: 0.9},
                         duration=5.0)
-    a, b = dut.disturbance_response(t, d, [("end_effector", 2.5, 3.0), ("helicopter", 1.0, 2.0)])
+    a, b = dut.disturbance_response(t, named(d), [("end_effector", 2.5, 3.0),
+                                                  ("helicopter", 1.0, 2.0)])
     # Window (1, 2) s ends at min(2 + 1, 2.5) = 2.5 s: the peaks at 2.6 / 2.7 are b's only.
     assert b["evaluated_s"] == [1.0, 2.5]
     assert (b["ee_position_error_peak_m"], b["com_error_peak_m"]) == (0.1, 0.2)
@@ -185,12 +214,12 @@ def test_disturbance_response_is_cut_at_the_next_window():
 
 def test_disturbance_response_beyond_the_log():
     t, d = response_log(peaks_ee={}, peaks_com={}, duration=3.0)
-    (r,) = dut.disturbance_response(t, d, [("helicopter", 4.0, 5.0)])
+    (r,) = dut.disturbance_response(t, named(d), [("helicopter", 4.0, 5.0)])
     assert r["ee_position_error_peak_m"] is None and r["com_error_peak_m"] is None
     assert r["ee_to_com_peak_ratio"] is None
     # A window with no CoM error gives no ratio (not a division by zero).
     t, d = response_log(peaks_ee={1.5: 0.1}, peaks_com={}, duration=3.0)
-    (r,) = dut.disturbance_response(t, d, [("helicopter", 1.0, 2.0)])
+    (r,) = dut.disturbance_response(t, named(d), [("helicopter", 1.0, 2.0)])
     assert r["ee_position_error_peak_m"] == 0.1 and r["ee_to_com_peak_ratio"] is None
 
 

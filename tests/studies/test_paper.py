@@ -62,13 +62,13 @@ def test_perturb_initial_is_reproducible_bounded_and_pure():
 
 
 # --- Metrics helpers ------------------------------------------------------------------------
-def _synthetic_diagnostics(t, ee, com):
+def _synthetic_entries(t, ee, com):
     sl = diagnostics_slices(N_TASK)
     size = max(s.stop for s in sl.values())
     d = np.zeros((len(t), size))
     d[:, sl["ee_position_error"]] = ee[:, None]
     d[:, sl["com_error"]] = com[:, None]
-    return d
+    return {name: d[:, cols] for name, cols in sl.items()}
 
 
 def test_disturbance_response_peaks_and_windows():
@@ -77,7 +77,7 @@ def test_disturbance_response_peaks_and_windows():
     com = np.where((t > 5.5) & (t < 5.6), 0.25, 0.01) + np.where(t > 6.5, 1.0, 0.0)
     windows = [("vehicle", 4.0, 5.0), ("end_effector", 9.0, 10.0),
                ("vehicle", 5.8, 6.0), ("vehicle", 20.0, 21.0)]
-    out = disturbance_response(t, _synthetic_diagnostics(t, ee, com), windows)
+    out = disturbance_response(t, _synthetic_entries(t, ee, com), windows)
     first = out[0]
     assert first["window_s"] == [4.0, 5.0]
     assert first["evaluated_s"] == [4.0, 5.8]  # stop + 1 s, cut at the next window's start

@@ -19,10 +19,11 @@ only, through the columns of T^-1 that the vectors' nonzero entries meet.
 
 The modules, bottom to top: :mod:`.views` (the decorators and the views of flat storage),
 :mod:`.linalg` (small dense linear algebra), :mod:`.kinematics` (the packed tree and forward
-kinematics), :mod:`.kernels` (Section II and the law) and :mod:`.law` (the Python entry points,
-re-exported here: :class:`CompiledLaw`, :func:`decompose`, :func:`pack_gains`, and
-:func:`compile_law` with :func:`law_cache_is_cold` for compiling before a run,
-:func:`aerial_drake.simulation.runner.compile_kernels`); the kernels are private.
+kinematics), :mod:`.kernels` (Section II, the law and the tracking errors) and :mod:`.law` (the
+Python entry points, re-exported here: :class:`CompiledLaw`, :class:`CompiledTracking`,
+:func:`decompose`, :func:`pack_gains`, and :func:`compile_law` with :func:`law_cache_is_cold`
+for compiling before a run, :func:`aerial_drake.simulation.runner.compile_kernels`); the
+kernels are private.
 numba compiles them on first use and caches the machine code next to their files (``cache=True``),
 so only the first run after installing pays the compile time (about a minute on a 2-core
 machine; a note on stderr says so); later processes load the machine code in under a second.
@@ -35,11 +36,12 @@ numba-level inlining of the functions that build the tuples of views (see
 from aerial_drake.control.compiled.kernels import ASSUMPTION_1, ASSUMPTION_2, NONFINITE, OK
 from aerial_drake.control.compiled.law import (
     CompiledLaw,
+    CompiledTracking,
     compile_law,
     decompose,
     law_cache_is_cold,
     pack_gains,
 )
 
-__all__ = ["ASSUMPTION_1", "ASSUMPTION_2", "NONFINITE", "OK", "CompiledLaw", "compile_law",
-           "decompose", "law_cache_is_cold", "pack_gains"]
+__all__ = ["ASSUMPTION_1", "ASSUMPTION_2", "NONFINITE", "OK", "CompiledLaw", "CompiledTracking",
+           "compile_law", "decompose", "law_cache_is_cold", "pack_gains"]

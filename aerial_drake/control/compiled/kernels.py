@@ -3,7 +3,11 @@
 :func:`_decompose` computes every quantity of
 :class:`~aerial_drake.dynamics.decoupling.Decomposition` and :func:`_law` the law of
 :func:`aerial_drake.control.law.compute_control`, with the same formulas in the same order as
-the numpy code; :mod:`aerial_drake.control.compiled.law` holds the Python entry points.
+the numpy code; :func:`_tracking` the tracking errors of a batch of states
+(:mod:`aerial_drake.simulation.tracking`) with :func:`_law`'s statements for them, so equal
+to its diagnostics to the bit (and in this file for the same cache reason as below: it must
+recompile whenever Section II or the law's kinematics change);
+:mod:`aerial_drake.control.compiled.law` holds the Python entry points.
 
 Why this module is longer than the others (some 770 lines): Section II and the law are one
 compile unit. The law's workspace nests Section II's (:func:`_law_buffers` lays out
@@ -830,3 +834,106 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
         diagnostics[k] = value
         k += 1
     return OK, f_d_norm, sigma_min
+
+
+@_jit
+def _tracking(X, com, task, heading, out, model, index, work):
+    """The tracking errors at each row of ``X`` (states, as the law's ``x``) and of the
+    references ``com``, ``task``, ``heading`` (one row per sample), into ``out``'s rows in
+    simulation.tracking.tracking_layout(n) order; a row with a non-finite state is NaN.
+
+    The same quantities as the law's diagnostics of the same names, by the same kernels in
+    the same order (so equal to the bit): Section II, the end-effector kinematics, J3 and the
+    task error of :func:`_law`, without the control. ``model``, ``index``: packed as for
+    CompiledLaw (its gains and limits are not read); ``work``: sized by :func:`_law_buffers`.
+    """
+    tree, p = _unpack_law(model, index)
+    nv = tree.reflected.shape[0]
+    n = nv - 6
+    s, w, end = _law_buffers(work, tree.parent.shape[0], nv)
+    if end > work.shape[0]:
+        raise ValueError("workspace too small")
+    for k in range(X.shape[0]):
+        x, row = X[k], out[k]
+        finite = True
+        for i in range(x.shape[0]):
+            if not math.isfinite(x[i]):
+                finite = False
+        if not finite:
+            for i in range(row.shape[0]):
+                row[i] = math.nan
+            continue
+        _tracking_row(x, com[k], task[k], heading[k], row, tree, p, s, w, n, nv)
+
+
+@_jit
+def _tracking_row(x, com, task, heading, row, tree, p, s, w, n, nv):
+    """One row of :func:`_tracking` (the statements are :func:`_law`'s, in its order)."""
+    q, v = x[:p.nq], x[p.nq:]
+    m, base = _section2(q, v, tree, s)
+    R, T, T_inv = s.R_all[base], s.T, s.T_inv
+    xi = w.xi
+    _mv_into(T, v, xi)
+    x_t, x_t_dot = w.x_t[0], w.x_t[1]
+    for i in range(3):
+        x_t[i] = s.p_WG[i] - com[i]
+        x_t_dot[i] = xi[i] - com[3 + i]
+    # The end-effector frame's pose and World Jacobian [v_E; w_E], and the task's rows.
+    Ri, pi, Ji = s.R_all[p.ee_body], s.p_all[p.ee_body], s.J[p.ee_body]
+    Pp = w.Pp  # [-hat(p_BE), E]
+    _hat_into(p.p_BE, w.hat)
+    _zero(Pp)
+    for i in range(3):
+        Pp[i, 3 + i] = 1.0
+        for j in range(3):
+            Pp[i, j] = -w.hat[i, j]
+    top, J6, J_y = w.top[0], w.J6[0], w.J_y[0]
+    _mm_into(Pp, Ji, top)
+    _mm_into(Ri, top, J6[0:3])
+    _mm_into(Ri, Ji[:3], J6[3:6])
+    for i in range(n):
+        r = p.rows[i]
+        for j in range(nv):
+            J_y[i, j] = J6[r, j] if r < 6 else 0.0
+        if r >= 6:
+            J_y[i, p.joint_v[r - 6]] = 1.0
+    R_WE, p_WE = w.R_WE, w.p_WE
+    _mm_into(Ri, p.R_BE, R_WE)
+    _mv_into(Ri, p.p_BE, p_WE)
+    for i in range(3):
+        p_WE[i] = pi[i] + p_WE[i]
+    # Assumption 1's margin: sigma_min(J3), J3 the last n columns of J_y T^-1.
+    Jt, J3 = w.Jt, w.J3
+    _mm_into(J_y, T_inv, Jt)
+    _copy(Jt[:, 6:], J3)
+    _mtm_into(J3, J3, w.JtJ)
+    sigma_min = math.sqrt(max(_min_eigenvalue_sym(w.JtJ, w.vn[13:17]), 0.0))
+    # The task error (17)-(18): rows of [p_E - p_ed; vee(skew(R_E R_ed^T)); q_j - q_jd].
+    R_err, y_t, y6 = w.R_err, w.y_t[0], w.y6
+    _mm_into(R_WE, task[3:12].reshape((3, 3)).T, R_err)
+    for i in range(3):
+        y6[i] = p_WE[i] - task[i]
+    _vee_into(R_err, y6[3:6])
+    for i in range(n):
+        r = p.rows[i]
+        y_t[i] = y6[r] if r < 6 else x[p.joint_q[r - 6]] - task[12 + r - 6]
+    k = 0
+    for block in (x_t, x_t_dot, y_t):
+        for i in range(block.shape[0]):
+            row[k] = block[i]
+            k += 1
+    # The heading: the angle about b3 = R e3 from the base's x axis b1 = R e1 to the heading
+    # reference b1d projected on the plane normal to b3 (Lee et al.'s b1 of R_d, with the
+    # base's own b3); and the tilt, the angle of b3 from World z.
+    b1d = heading[0:3]
+    along = R[0, 2] * b1d[0] + R[1, 2] * b1d[1] + R[2, 2] * b1d[2]
+    c, sn = 0.0, 0.0
+    for i in range(3):
+        proj = b1d[i] - along * R[i, 2]
+        c += R[i, 0] * proj
+        sn += R[i, 1] * proj  # (b1 x proj) . b3 = b2 . proj
+    scalars = (sigma_min, _norm(x_t), _norm(y6[:3]), _rotation_angle(R_err),
+               abs(math.atan2(sn, c)), math.acos(min(max(R[2, 2], -1.0), 1.0)))
+    for value in scalars:
+        row[k] = value
+        k += 1

@@ -1,6 +1,6 @@
-"""The compiled law's Python entry points: :class:`CompiledLaw`, :func:`decompose`,
-:func:`pack_gains`, and :func:`compile_law` with :func:`law_cache_is_cold` (for compiling before
-a run: :func:`aerial_drake.simulation.runner.compile_kernels`)."""
+"""The compiled law's Python entry points: :class:`CompiledLaw`, :class:`CompiledTracking`,
+:func:`decompose`, :func:`pack_gains`, and :func:`compile_law` with :func:`law_cache_is_cold`
+(for compiling before a run: :func:`aerial_drake.simulation.runner.compile_kernels`)."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ from aerial_drake.control.compiled.kernels import (
     _decompose,
     _law,
     _packed_gains_size,
+    _tracking,
     _workspace_size,
 )
 from aerial_drake.control.compiled.kinematics import _pack_tree
@@ -80,6 +81,9 @@ def _note_if_cold() -> None:
 # The law's one signature: every argument a C-contiguous 1-D array, float but the index.
 _F64 = types.Array(types.float64, 1, "C")
 _LAW_SIGNATURE = (_F64,) * 7 + (types.Array(types.int64, 1, "C"), _F64)
+# The tracking errors': the states, references and output as C-contiguous 2-D float arrays.
+_F64_2D = types.Array(types.float64, 2, "C")
+_TRACKING_SIGNATURE = (_F64_2D,) * 5 + (_F64, types.Array(types.int64, 1, "C"), _F64)
 
 
 def compile_law() -> None:
@@ -88,7 +92,25 @@ def compile_law() -> None:
     (``simulation.runner.compile_kernels``; a test holds these signatures to what a run calls)."""
     _note_if_cold()
     _law.compile(_LAW_SIGNATURE)
+    _tracking.compile(_TRACKING_SIGNATURE)
     _workspace_size.compile((types.int64, types.int64, types.boolean))
+
+
+def _pack_law(tree: KinematicTree, num_positions: int,
+              end_effector: tuple[int, np.ndarray, np.ndarray], task: TaskLayout,
+              gains: np.ndarray, limits: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+    """The float and integer arrays the law's kernels unpack (``kernels._unpack_law``): the
+    tree, then the end-effector frame, the gains and the limits; the task's layout."""
+    body, R_BE, p_BE = end_effector
+    nv = tree.reflected_inertia.size
+    if task.n != nv - 6:
+        raise ValueError(f"a task of {task.n} rows for {nv - 6} arm velocities")
+    floats, ints = _pack_tree(tree)
+    model = np.concatenate([floats, np.ravel(R_BE), np.ravel(p_BE), gains, limits]
+                           ).astype(float)
+    index = np.concatenate([ints, [num_positions, body, task.n_joints], task.rows,
+                            task.joint_positions, task.joint_velocities]).astype(np.int64)
+    return model, index
 
 
 class CompiledLaw:
@@ -112,20 +134,12 @@ class CompiledLaw:
                  end_effector: tuple[int, np.ndarray, np.ndarray], task: TaskLayout,
                  gains: np.ndarray, sigma_min_J3_limit: float,
                  f_d_limit: float):
-        body, R_BE, p_BE = end_effector
         nb, nv = tree.parent.size, tree.reflected_inertia.size
         gains = np.ravel(gains).astype(float)
         if gains.size != _packed_gains_size(nv - 6):
             raise ValueError(f"{gains.size} gains for {nv} velocities: see pack_gains")
-        floats, ints = _pack_tree(tree)
-        # The law's parameters after the tree, in the order _unpack_law reads them.
-        self._model = np.concatenate([floats, np.ravel(R_BE), np.ravel(p_BE), gains,
-                                      [sigma_min_J3_limit, f_d_limit]]).astype(float)
-        if task.n != nv - 6:
-            raise ValueError(f"a task of {task.n} rows for {nv - 6} arm velocities")
-        self._index = np.concatenate([ints, [num_positions, body, task.n_joints], task.rows,
-                                      task.joint_positions, task.joint_velocities]
-                                     ).astype(np.int64)
+        self._model, self._index = _pack_law(tree, num_positions, end_effector, task, gains,
+                                             (sigma_min_J3_limit, f_d_limit))
         self._n_joints = task.n_joints
         self._work = np.zeros(_workspace_size(nb, nv, True))
         self._nq, self._nv = int(num_positions), nv
@@ -150,3 +164,31 @@ class CompiledLaw:
                  command: np.ndarray, diagnostics: np.ndarray) -> tuple[int, float, float]:
         return _law(x, com, task, heading, command, diagnostics, self._model, self._index,
                     self._work)
+
+
+class CompiledTracking:
+    """The tracking errors of :mod:`aerial_drake.simulation.tracking`, compiled:
+    ``tracking(X, com, task, heading)`` gives one row per row of the states ``X`` (the law's
+    ``x``) and of the references. The same kernels as :class:`CompiledLaw`'s in the same
+    order, so each entry equals the law's diagnostic of the same name to the bit.
+
+    Args: as :class:`CompiledLaw`'s first four.
+    """
+
+    def __init__(self, tree: KinematicTree, num_positions: int,
+                 end_effector: tuple[int, np.ndarray, np.ndarray], task: TaskLayout):
+        nb, nv = tree.parent.size, tree.reflected_inertia.size
+        self.n = nv - 6
+        # The law's packing; the kernel reads no gain or limit, so zeros stand for them.
+        self._model, self._index = _pack_law(tree, num_positions, end_effector, task,
+                                             np.zeros(17 + 2 * self.n), (0.0, 0.0))
+        self._work = np.zeros(_workspace_size(nb, nv, True))
+
+    def __call__(self, X: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
+                 width: int) -> np.ndarray:
+        """(N, ``width``) rows of the tracking errors (``width`` of the layout)."""
+        out = np.empty((len(X), width))
+        X, com, task, heading = (np.ascontiguousarray(a, dtype=float)
+                                 for a in (X, com, task, heading))
+        _tracking(X, com, task, heading, out, self._model, self._index, self._work)
+        return out
