@@ -18,4 +18,4 @@ def test_diagram_script_runs(script, tmp_path):
     dot = next(tmp_path.glob("*_closed_loop.dot")).read_text()
     for block in ("plant", "controller", "reference", "end_effector_wrench", "base_actuator"):
         assert block in dot
-    assert next(tmp_path.glob("*/metrics.json")).is_file()
+    assert next(tmp_path.glob("**/metrics.json")).is_file()

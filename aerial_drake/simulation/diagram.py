@@ -39,6 +39,8 @@ from pydrake.systems.primitives import (
 
 from aerial_drake.control.controller import DecoupledController
 from aerial_drake.control.interface import check_controller_ports
+from aerial_drake.control.registry import ControllerFactory
+from aerial_drake.control.registry import controller_factory as scenario_controller_factory
 from aerial_drake.robots.models import AerialManipulator, add_to_builder
 from aerial_drake.simulation.actuators import (
     ActuatorLag,
@@ -47,8 +49,6 @@ from aerial_drake.simulation.actuators import (
     lag_time_constant,
     make_base_actuator,
 )
-from aerial_drake.simulation.controllers import ControllerFactory
-from aerial_drake.simulation.controllers import controller_factory as scenario_controller_factory
 from aerial_drake.simulation.disturbances import add_wrench_source, resolve_random_disturbances
 from aerial_drake.simulation.scenarios import Scenario
 from aerial_drake.simulation.sensing import add_state_sensor

@@ -19,12 +19,15 @@ from pydrake.systems.framework import Context
 from pydrake.systems.primitives import VectorLogSink
 
 from aerial_drake.control.compiled import compile_law
+from aerial_drake.control.interface import diagnostics_layout_of
 from aerial_drake.control.law import AssumptionViolation, diagnostics_layout
-from aerial_drake.simulation.controllers import ControllerFactory
+from aerial_drake.control.reference_pose import reference_configuration
+from aerial_drake.control.registry import ControllerFactory
 from aerial_drake.simulation.diagram import ClosedLoop, build_simulation, input_limits
 from aerial_drake.simulation.disturbances import resolve_random_disturbances
 from aerial_drake.simulation.feasibility import check_reference, check_start_posture
 from aerial_drake.simulation.interrupts import deferred, handling, signal_name
+from aerial_drake.simulation.logged_errors import with_paper_layout
 from aerial_drake.simulation.metrics import (
     compute_metrics,
     disturbance_response,
@@ -45,7 +48,6 @@ from aerial_drake.simulation.outputs import (
     write_result_set,
 )
 from aerial_drake.simulation.perturbations import start_perturbations
-from aerial_drake.simulation.reference_pose import reference_configuration
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
 from aerial_drake.simulation.scenarios.checks import REALTIME, estimated_log_mb, number
 from aerial_drake.trajectories.kinds import sample_reference
@@ -87,6 +89,9 @@ class RunResult:
     out_dir: Path | None = None
     #: One name per task row (robots.task.TaskLayout.labels), stored with the log's layout.
     task_labels: tuple[str, ...] = ()
+    #: The controller's own diagnostics, (name, size) pairs, where they are logged apart
+    #: (``controller_diagnostics``: a controller other than the paper's).
+    controller_diagnostics_layout: tuple[tuple[str, int], ...] = ()
 
 
 def set_initial_state(scenario: Scenario, loop: ClosedLoop, plant_context: Context) -> None:
@@ -226,7 +231,7 @@ def _collect_log(scenario: Scenario, loop: ClosedLoop, loggers: dict[str, Vector
     arrays.update(zip(("com_reference", "task_reference", "heading_reference"), references))
     if _period(loop.controller) > 0 and n > 0:
         arrays = _align_held_diagnostics(arrays, loop)
-    return arrays
+    return with_paper_layout(arrays, loop)
 
 
 def _align_held_diagnostics(arrays: dict[str, np.ndarray], loop: ClosedLoop,
@@ -245,7 +250,8 @@ def _align_held_diagnostics(arrays: dict[str, np.ndarray], loop: ClosedLoop,
     x = arrays["plant_state"][-1][loop.simulated_plant.rigid_state_indices]
     try:
         last = loop.controller.evaluate(x, *(arrays[k][-1] for k in (
-            "com_reference", "task_reference", "heading_reference")))[1]
+            "com_reference", "task_reference", "heading_reference")),
+            t=float(arrays["t"][-1]))[1]
     except FloatingPointError:
         last = np.full(held.shape[1], np.nan)
     except AssumptionViolation:
@@ -378,7 +384,8 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
                        f"{likely_cause(scenario)}")
         metrics = _metrics(scenario, loop, arrays, wall, sim_time)
         result = RunResult(scenario=scenario, log=arrays, metrics=metrics, wall_time_s=wall,
-                           completed=failure is None, failure=failure)
+                           completed=failure is None, failure=failure,
+                           controller_diagnostics_layout=diagnostics_layout_of(loop.controller))
         extra = extra_files() if extra_files is not None else {}
         if lock is not None:
             result.out_dir = write_outputs(result, lock.folder, extra)
@@ -445,8 +452,12 @@ def write_outputs(result: RunResult, out_dir: str | Path,
     out.mkdir(parents=True, exist_ok=True)
     n = (result.log["diagnostics"].shape[1] - _BASE_DIAGNOSTICS) // 2 \
         if "diagnostics" in result.log else 0
-    names = json.dumps({"diagnostics": [list(x) for x in diagnostics_layout(n)],
-                        "task": list(result.task_labels)})
+    layout = {"diagnostics": [list(x) for x in diagnostics_layout(n)],
+              "task": list(result.task_labels)}
+    if "controller_diagnostics" in result.log:
+        layout["controller_diagnostics"] = [list(x) for x in
+                                            result.controller_diagnostics_layout]
+    names = json.dumps(layout)
     arrays: dict[str, Any] = dict(result.log)  # (typed Any: numpy's stub has a bool keyword)
     metrics = dict(result.metrics)
     metrics["completed"] = result.completed
