@@ -240,11 +240,13 @@ class ZeroController(ControllerBase):
 
     def __init__(self, plant: MultibodyPlant, task: TaskLayout, *, period: float = 0.0):
         super().__init__(plant, task, period=period)
-        self._zero = np.zeros(plant.num_velocities() - 2)  # [f, mu (3), tau (nv - 6)]
 
-    def calc_command(self, t: float, x: np.ndarray, com: np.ndarray, task: np.ndarray,
-                     heading: np.ndarray) -> np.ndarray:
-        return self._zero
+    def evaluate_into(self, t: float, x: np.ndarray, com: np.ndarray, task: np.ndarray,
+                      heading: np.ndarray, command: np.ndarray, diagnostics: np.ndarray,
+                      ) -> None:
+        # Zeros, whatever the state: it computes nothing from it (so a non-finite state is
+        # left for the runner to find, as the plant's own).
+        command[:] = 0.0
 
 
 def make_controller(model: AerialManipulator, gains: Gains, *,
