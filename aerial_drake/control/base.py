@@ -165,8 +165,9 @@ def _define(T):
             Raises:
                 AssumptionViolation, FloatingPointError: naming the context's time.
             """
+            x, com, task, heading = self._inputs(context)
             try:
-                return self.evaluate(*self._inputs(context), t=context.get_time())
+                return self.evaluate(x, com, task, heading, t=context.get_time())
             except (AssumptionViolation, FloatingPointError) as err:
                 raise at_time(err, context) from None
 
@@ -188,7 +189,8 @@ def _define(T):
         def get_diagnostics_output_port(self):
             return self.GetOutputPort("diagnostics")
 
-        def _inputs(self, context: Context_[T]) -> tuple:
+        def _inputs(self, context: Context_[T]
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
             """The state and the three references at ``context``."""
             state, com, task, heading = self._ports
             return (state.Eval(context), com.Eval(context), task.Eval(context),

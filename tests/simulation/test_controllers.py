@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from pydrake.systems.framework import LeafSystem
 
+from aerial_drake.control import registry as dut
 from aerial_drake.control.baselines import BaselineController
 from aerial_drake.control.controller import DecoupledController
-from aerial_drake.control import registry as dut
 from aerial_drake.control.interface import check_controller_ports
 from aerial_drake.control.law import diagnostics_slices
 from aerial_drake.robots.models import make_plant

@@ -109,7 +109,7 @@ class BaselineController(ControllerBase):
         x_g = plant.CalcCenterOfMassPositionInWorld(ctx)
         X_WE = self._frame.CalcPoseInWorld(ctx)
         com_ref = unpack_com_reference(com)
-        t = unpack_task_reference(task)
+        ref = unpack_task_reference(task)
         b1d = unpack_heading_reference(heading)
 
         # The vehicle alone (Lee et al.), on its own body position and attitude.
@@ -143,9 +143,9 @@ class BaselineController(ControllerBase):
         M_aa = plant.CalcMassMatrix(ctx)[np.ix_(self._arm_v, self._arm_v)]
         h_a = (plant.CalcBiasTerm(ctx) - plant.CalcGravityGeneralizedForces(ctx))[self._arm_v]
         q_j = x[list(self._task.joint_positions)]
-        y_t, _ = task_error(X_WE.translation(), X_WE.rotation().matrix(), q_j, t.p_ed, t.R_ed,
-                            t.q_jd, rows)
-        y_d_dot, y_d_ddot = t.full_dot[rows], t.full_ddot[rows]
+        y_t, _ = task_error(X_WE.translation(), X_WE.rotation().matrix(), q_j, ref.p_ed, ref.R_ed,
+                            ref.q_jd, rows)
+        y_d_dot, y_d_ddot = ref.full_dot[rows], ref.full_ddot[rows]
         arm = fixed_base_task_torque(J_a, bias, M_aa, h_a, y_dot, y_t, y_d_dot, y_d_ddot,
                                      K.K_y, K.K_z)
         if not arm.sigma_min > self._params.sigma_min_limit:
