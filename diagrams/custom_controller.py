@@ -12,12 +12,11 @@ shows what that costs.
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 from pathlib import Path
 
 import numpy as np
-from _common import write_graphviz
+from _common import draw_closed_loop, parse_command_line
 
 from aerial_drake.control.base import ControllerBase
 from aerial_drake.control.baselines.vehicle import body_reference, geometric_vehicle_law
@@ -70,25 +69,17 @@ class JointHoldController(ControllerBase):
 
 
 def main() -> None:
-    from aerial_drake.simulation.diagram import build_closed_loop
     from aerial_drake.simulation.scenarios import load_scenario
     from aerial_drake.studies.compare import run_compare
 
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("scenario", nargs="?", default="nominal")
-    parser.add_argument("--duration", type=float, default=2.0)
-    parser.add_argument("--out", default="out/diagrams")
-    args = parser.parse_args()
+    args = parse_command_line(__doc__)
     # Register once; then any scenario may say `controller: {type: joint_hold}`.
     register_controller("joint_hold", JointHoldController)
-    out = Path(args.out)
     scenario = load_scenario(args.scenario, overrides={"duration": args.duration})
-    scenario = dataclasses.replace(scenario, controller=dataclasses.replace(
-        scenario.controller, type="joint_hold"))
-    for path in write_graphviz(build_closed_loop(scenario).diagram,
-                               out / f"{scenario.name}_joint_hold_closed_loop"):
-        print(f"wrote {path}")
-    result = run_compare(args.scenario, ("paper", "joint_hold"), out, args.duration, jobs=1)
+    draw_closed_loop(dataclasses.replace(
+        scenario, name=f"{scenario.name}_joint_hold",
+        controller=dataclasses.replace(scenario.controller, type="joint_hold")), Path(args.out))
+    result = run_compare(args.scenario, ("paper", "joint_hold"), args.out, args.duration, jobs=1)
     print(result.table)
 
 
