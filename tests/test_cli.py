@@ -10,10 +10,11 @@ import pytest
 from pydrake.common.yaml import yaml_dump_typed
 
 from aerial_drake.analysis.report import format_lee, format_open_loop
-from aerial_drake.cli import build_parser, format_summary
+from aerial_drake.cli import build_parser
 from aerial_drake.cli import main as dut
 from aerial_drake.simulation.metrics import input_names
 from aerial_drake.simulation.scenarios import load_scenario, shipped_scenarios
+from aerial_drake.studies.summary import format_summary
 from aerial_drake.viz import plots
 from aerial_drake.viz.run_plots import run_labels
 

@@ -1,9 +1,8 @@
 """The first run after installing: the command line compiles the numba kernels before the run
-and restarts itself (aerial_drake.cli._compile_first), so that compile's memory is not under
+and restarts itself (aerial_drake.cli.restart.compile_first), so that compile's memory is not under
 the run. Here: runner.compile_kernels compiles every kernel a run calls from Python (nothing
 is left to compile during the run), and when the command restarts and when it does not."""
 
-import argparse
 import json
 import os
 import subprocess
@@ -12,6 +11,7 @@ import sys
 import pytest
 
 from aerial_drake import cli
+from aerial_drake.cli import info, restart
 
 # In a fresh process: compile_kernels, then a short closed-loop run; print every numba
 # dispatcher of the package's kernel modules that gained a signature during the run.
@@ -53,7 +53,7 @@ class _Restart(Exception):
 
 @pytest.fixture
 def first_run(monkeypatch):
-    """_compile_first with the cache reported cold, compiling and exec recorded, not done."""
+    """compile_first with the cache reported cold, compiling and exec recorded, not done."""
     calls = {"compiled": 0, "execv": None}
     cold = {"before": True, "after": False}
 
@@ -70,12 +70,8 @@ def first_run(monkeypatch):
     monkeypatch.setattr("aerial_drake.control.compiled.law_cache_is_cold", law_cache_is_cold)
     monkeypatch.setattr("aerial_drake.simulation.runner.compile_kernels", compile_kernels)
     monkeypatch.setattr(os, "execv", execv)
-    monkeypatch.delenv(cli._RESTARTED, raising=False)
+    monkeypatch.delenv(restart.RESTARTED, raising=False)
     return calls, cold
-
-
-def _args(restartable=True):
-    return argparse.Namespace(restartable=restartable)
 
 
 def test_cold_cache_compiles_then_restarts_as_it_was_started(first_run, monkeypatch):
@@ -85,11 +81,11 @@ def test_cold_cache_compiles_then_restarts_as_it_was_started(first_run, monkeypa
     # directory would shadow.
     monkeypatch.setattr(sys, "orig_argv", ["python3", "/venv/bin/aerial-drake", "run", "paper"])
     with pytest.raises(_Restart):
-        cli._compile_first(_args())
+        restart.compile_first(restartable=True)
     assert calls["compiled"] == 1
     assert calls["execv"] == (sys.executable,
                               [sys.executable, "/venv/bin/aerial-drake", "run", "paper"])
-    assert os.environ[cli._RESTARTED] == "1"  # the restarted process will not restart
+    assert os.environ[restart.RESTARTED] == "1"  # the restarted process will not restart
 
 
 @pytest.mark.parametrize("case", ["warm", "called from python", "restarted", "cache not written"])
@@ -101,17 +97,17 @@ def test_no_restart(first_run, monkeypatch, case):
     elif case == "called from python":
         restartable = False  # cli.main(argv): never replace the caller's process
     elif case == "restarted":
-        monkeypatch.setenv(cli._RESTARTED, "1")
+        monkeypatch.setenv(restart.RESTARTED, "1")
     else:
         cold["after"] = True
-    cli._compile_first(_args(restartable))
+    restart.compile_first(restartable)
     assert calls["execv"] is None
     assert calls["compiled"] == (1 if case == "cache not written" else 0)
 
 
 def test_main_from_python_does_not_restart(monkeypatch):
     seen = {}
-    monkeypatch.setattr(cli, "_cmd_info", lambda args: seen.setdefault("restart", args.restartable)
+    monkeypatch.setattr(info, "cmd_info", lambda args: seen.setdefault("restart", args.restartable)
                         and 0)
     cli.main(["info"])
     assert seen["restart"] is False

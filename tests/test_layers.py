@@ -4,8 +4,8 @@ package's folders, and modules stay small.
 
 Layers, top to bottom (a module imports from its own subpackage and from layers below only):
 
-    cli, __main__ -> studies -> viz | analysis -> simulation -> control -> trajectories
-    -> dynamics -> robots -> drake_compat
+    cli (the package: parser, commands, errors), __main__ -> studies -> viz | analysis
+    -> simulation -> control -> trajectories -> dynamics -> robots -> drake_compat
 
 ``viz`` and ``analysis`` share a layer and must not import each other. ``trajectories`` sits
 under ``control``: the controller reads the packed reference vectors whose layout the
@@ -38,6 +38,8 @@ RANKS = {
     "analysis": 5,
     "viz": 5,
     "studies": 6,
+    # The command line, a package: it only parses and prints; everything below it takes typed
+    # arguments, never an argparse.Namespace (test_only_the_command_line_parses).
     "cli": 7,
     "__main__": 8,
 }
@@ -174,3 +176,20 @@ def test_modules_are_small():
     long = {name: n for name, path in MODULES.items()
             if (n := len(path.read_text().splitlines())) > MAX_LINES}
     assert set(long) <= LONG_MODULES, f"modules over {MAX_LINES} lines: {long}"
+
+
+#: Modules outside the command-line package that parse arguments: viz.plots keeps its own
+#: ``python -m aerial_drake.viz.plots`` (docs/paper.md), parsing in its ``main`` only.
+OWN_COMMAND_LINES = {"aerial_drake.viz.plots"}
+
+
+def test_only_the_command_line_parses():
+    """Studies, analysis and the rest take typed arguments: no module below ``cli`` imports
+    argparse (so none takes an argparse.Namespace)."""
+    found = [name for name, path in MODULES.items()
+             if part(name) not in ("cli", "__main__") and name not in OWN_COMMAND_LINES
+             and any(isinstance(node, (ast.Import, ast.ImportFrom))
+                     and "argparse" in ([a.name for a in node.names]
+                                        if isinstance(node, ast.Import) else [node.module])
+                     for node in ast.walk(ast.parse(path.read_text(), str(path))))]
+    assert not found, f"modules below the command line that import argparse: {found}"

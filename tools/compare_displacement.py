@@ -15,8 +15,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from aerial_drake.simulation.run_folder import load_run
 from aerial_drake.studies.compare import disturbance_displacement
-from aerial_drake.viz.plots import load_run
 
 
 def main() -> None:

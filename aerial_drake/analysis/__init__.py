@@ -62,7 +62,6 @@ from aerial_drake.analysis.region_of_attraction import (
 )
 from aerial_drake.analysis.report import (
     analyze,
-    cli_analyze,
     format_eigenvalue_table,
     format_report,
 )
@@ -102,7 +101,6 @@ __all__ = [
     "figure_lyapunov",
     "figure_region_of_attraction",
     "analyze",
-    "cli_analyze",
     "format_eigenvalue_table",
     "format_report",
 ]

@@ -1,9 +1,9 @@
 """All of the analysis, written to a folder (:func:`analyze`: ``analysis.json`` and plots),
-its text report, and ``aerial-drake analyze`` (:func:`cli_analyze`)."""
+and its text report (:func:`format_report`); ``aerial-drake analyze`` (:mod:`aerial_drake.cli.
+analyze`) calls and prints them."""
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 from typing import TextIO
 
@@ -23,8 +23,7 @@ from aerial_drake.analysis.figures import (
 from aerial_drake.analysis.linearization import linearize_closed_loop
 from aerial_drake.analysis.lyapunov import lee_conditions, lyapunov_study, trajectory_accel_bound
 from aerial_drake.analysis.region_of_attraction import region_of_attraction
-from aerial_drake.analysis.settings import FAST_SETTINGS, FULL_SETTINGS, AnalysisSettings
-from aerial_drake.dynamics.equilibrium import UnreachablePose
+from aerial_drake.analysis.settings import FULL_SETTINGS, AnalysisSettings
 from aerial_drake.simulation.outputs import strict_json, write_text_atomically
 from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
 
@@ -191,18 +190,3 @@ def format_report(report: dict) -> str:
                      f"s = {s:g}: {f:.2f}"
                      for s, f in zip(roa["scales"], roa["converged_fraction"])))
     return "\n".join(lines)
-
-
-def cli_analyze(args: argparse.Namespace) -> int:
-    """``aerial-drake analyze [--out DIR] [--scenario NAME] [--fast] [--seed N] [--quiet]``."""
-    import sys
-
-    settings = FAST_SETTINGS if args.fast else FULL_SETTINGS
-    try:
-        report = analyze(args.out, scenario=args.scenario, settings=settings, seed=args.seed,
-                         stream=None if args.quiet else sys.stdout)
-    except (ScenarioError, UnreachablePose) as err:
-        print(f"error: {err}", file=sys.stderr)
-        return 2
-    print(format_report(report))
-    return 0

@@ -22,65 +22,18 @@ and the diagnostics' norms and angles are then taken on the values.
 """
 
 
-import dataclasses
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+# The gains live in their own module (one rule set); importable from here as before.
+from aerial_drake.control.gains import GainMatrices as GainMatrices
+from aerial_drake.control.gains import Gains as Gains
 from aerial_drake.dynamics.decoupling import Decomposition, cross, cross_rows, inv, value_of, vee
 
 _E3 = np.eye(3)
 _e3 = np.array([0.0, 0.0, 1.0])
-
-
-@dataclass
-class Gains:
-    """Controller gains of Table II (values live in the scenario YAML). Diagonal matrices are
-    given by their diagonals, as Proposition 1 requires diagonal positive definite gains."""
-
-    # CoM stiffness K_x, diagonal (N/m).
-    K_x: list[float] = field(default_factory=list)
-    # CoM damping D_x, diagonal (N s/m).
-    D_x: list[float] = field(default_factory=list)
-    # Attitude stiffness k_R (N m).
-    k_R: float = float("nan")
-    # Attitude damping k_w (N m s/rad).
-    k_w: float = float("nan")
-    # Desired closed-loop attitude inertia Lambda_2 bar, diagonal (kg m^2).
-    Lambda2_bar: list[float] = field(default_factory=list)
-    # Task error gain K_y, diagonal (1/s), one entry per task row in the robot's task order
-    # (the paper's: 3 position, 3 orientation, then q3).
-    K_y: list[float] = field(default_factory=list)
-    # Task velocity gain K_z, diagonal.
-    K_z: list[float] = field(default_factory=list)
-    # The small constants gamma_1, gamma_2 of the Lyapunov function V1 (25); they do not
-    # enter the control law. For Table II's gains gamma_1 = 20 meets Lee et al.'s CoM
-    # conditions (< 82) and gamma_2 = 0.4 their attitude bound (< 0.44); the condition that
-    # couples the two cannot be met with Table II's gains (docs/analysis.md, section 5).
-    lyapunov_gamma1: float = 20.0
-    lyapunov_gamma2: float = 0.4
-
-    def validate(self, n_task: int, prefix: str = "gains") -> "Gains":
-        """Raise ValueError naming the field if a gain is missing, of the wrong size, or not
-        positive definite. Returns self."""
-        sizes = {"K_x": 3, "D_x": 3, "Lambda2_bar": 3, "K_y": n_task, "K_z": n_task}
-        for name, size in sizes.items():
-            value = np.asarray(getattr(self, name), dtype=float)
-            if value.shape != (size,):
-                raise ValueError(
-                    f"{prefix}.{name} must be a list of {size} diagonal entries; got "
-                    f"{getattr(self, name)!r}. Set it in the scenario YAML.")
-            if not np.all(np.isfinite(value)) or np.any(value <= 0.0):
-                raise ValueError(
-                    f"{prefix}.{name} = {list(value)} is not positive definite: every diagonal "
-                    "entry must be finite and > 0 (Proposition 1).")
-        for name in ("k_R", "k_w", "lyapunov_gamma1", "lyapunov_gamma2"):
-            scalar = float(getattr(self, name))
-            if not np.isfinite(scalar) or scalar <= 0.0:
-                raise ValueError(f"{prefix}.{name} = {scalar} must be finite and > 0 "
-                                 "(Proposition 1). Set it in the scenario YAML.")
-        return self
 
 
 #: Default thresholds of the checks of Assumption 1 (sigma_min(J_3)) and 2 (|f_d|, N); a
@@ -353,29 +306,3 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
     return ControlOutput(f=f, mu=mu, tau=tau, diagnostics=diagnostics,
                          u_prime=u_prime, R_d=R_d, w_d=w_d, w_d_dot=w_d_dot,
                          Lambda_z=Lambda_z, Gamma_z=Gamma_z, J3=J3)
-
-
-@dataclass(frozen=True)
-class GainMatrices:
-    """Validated gains as numpy diagonals, for the control law's hot path."""
-
-    K_x: np.ndarray
-    D_x: np.ndarray
-    k_R: float
-    k_w: float
-    Lambda2_bar: np.ndarray
-    Lambda2_bar_inv: np.ndarray
-    K_y: np.ndarray
-    K_z: np.ndarray
-    gamma1: float
-    gamma2: float
-
-    @classmethod
-    def from_gains(cls, gains: Gains, n_task: int) -> "GainMatrices":
-        gains = dataclasses.replace(gains).validate(n_task)
-        L2 = np.asarray(gains.Lambda2_bar, dtype=float)
-        return cls(K_x=np.asarray(gains.K_x, float), D_x=np.asarray(gains.D_x, float),
-                   k_R=float(gains.k_R), k_w=float(gains.k_w), Lambda2_bar=L2,
-                   Lambda2_bar_inv=1.0 / L2, K_y=np.asarray(gains.K_y, float),
-                   K_z=np.asarray(gains.K_z, float), gamma1=float(gains.lyapunov_gamma1),
-                   gamma2=float(gains.lyapunov_gamma2))

@@ -13,18 +13,22 @@ import numpy as np
 from aerial_drake.control.law import desired_attitude, desired_force
 from aerial_drake.dynamics.equilibrium import solve_configuration
 from aerial_drake.robots.models import AerialManipulator
-from aerial_drake.trajectories.kinds import evaluate_reference
+from aerial_drake.trajectories.base import ReferenceSource
+from aerial_drake.trajectories.kinds import reference_of
 from aerial_drake.trajectories.reference import ReferenceSample
 
 
-def reference_configuration(scenario: Any, model: AerialManipulator,
-                            t: float = 0.0) -> np.ndarray:
+def reference_configuration(scenario: Any, model: AerialManipulator, t: float = 0.0, *,
+                            reference: ReferenceSource | None = None) -> np.ndarray:
     """Positions of ``model`` that realise ``scenario``'s reference at time ``t`` exactly: CoM
     on x_d, base attitude R_d of (13) for zero CoM error, end effector on (p_ed, R_ed),
-    the task's joints at their targets. (``scenario`` a
+    the task's joints at their targets. ``reference``: the run's reference (None: built from
+    ``scenario.trajectory``). (``scenario`` a
     :class:`~aerial_drake.simulation.scenarios.Scenario`; not imported here: the scenarios
     are the simulation layer's, above this one.)"""
-    ref = evaluate_reference(scenario.trajectory, t, model.task_joint_nominal())
+    if reference is None:
+        reference = reference_of(scenario.trajectory, model.task_joint_nominal())
+    ref = reference.evaluate(t)
     # Joint limits are not imposed: the simulated plant does not enforce them, and at t = 0 the
     # paper's reference needs joint 6 about 0.19 rad past its 120 deg (docs/control.md).
     return solve_configuration(model, **realising_targets(model, ref),
@@ -53,15 +57,19 @@ def mass_and_gravity(model: AerialManipulator) -> tuple[float, float]:
             -plant.gravity_field().gravity_vector()[2])
 
 
-def body_offset_in_heading_frame(scenario: Any, model: AerialManipulator) -> np.ndarray:
+def body_offset_in_heading_frame(scenario: Any, model: AerialManipulator,
+                                 reference: ReferenceSource | None = None) -> np.ndarray:
     """The CoM's offset from the vehicle body at the reference configuration of t = 0, in
     the heading frame [b1d, e3 x b1d, e3]: what the baselines' body reference keeps
-    (:func:`aerial_drake.control.baselines.vehicle.body_reference`)."""
+    (:func:`aerial_drake.control.baselines.vehicle.body_reference`). ``reference``: the run's
+    reference (None: built from ``scenario.trajectory``)."""
+    if reference is None:
+        reference = reference_of(scenario.trajectory, model.task_joint_nominal())
     plant = model.plant
     ctx = plant.CreateDefaultContext()
-    plant.SetPositions(ctx, reference_configuration(scenario, model))
+    plant.SetPositions(ctx, reference_configuration(scenario, model, reference=reference))
     p_b = plant.EvalBodyPoseInWorld(ctx, model.base_body).translation()
     offset = plant.CalcCenterOfMassPositionInWorld(ctx) - p_b
-    b1 = evaluate_reference(scenario.trajectory, 0.0, model.task_joint_nominal()).b1d[0]
+    b1 = reference.evaluate(0.0).b1d[0]
     H = np.column_stack([b1, np.cross([0.0, 0.0, 1.0], b1), [0.0, 0.0, 1.0]])
     return H.T @ offset

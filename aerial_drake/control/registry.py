@@ -7,15 +7,19 @@ the system has the ports of :mod:`aerial_drake.control.interface`, most simply a
 of :class:`aerial_drake.control.base.ControllerBase`. Register your own with
 :func:`register_controller` (then ``controller: {type: NAME}`` in a scenario selects it), or
 hand a factory straight to :func:`aerial_drake.simulation.runner.run_scenario`
-(``controller_factory=``); ``diagrams/custom_controller.py`` shows both.
+(``controller_factory=``); ``diagrams/custom_controller.py`` shows both. A factory that
+takes a ``reference`` keyword also gets the run's
+:class:`~aerial_drake.trajectories.base.ReferenceSource` (:func:`make_controller_system`).
 """
 
 from __future__ import annotations
 
+import inspect
 from typing import Any, Callable
 
 from aerial_drake.control.baselines.params import BASELINE_TYPES
 from aerial_drake.robots.models import AerialManipulator
+from aerial_drake.trajectories.base import ReferenceSource
 
 # The scenario argument is a :class:`aerial_drake.simulation.scenarios.Scenario` (the layer
 # above): a factory reads its fields (gains, controller_period, controller, trajectory).
@@ -43,14 +47,15 @@ def zero_controller(scenario: Any, model: AerialManipulator):
 
 
 def _baseline(kind: str) -> ControllerFactory:
-    def factory(scenario: Any, model: AerialManipulator):
+    def factory(scenario: Any, model: AerialManipulator,
+                reference: ReferenceSource | None = None):
         from aerial_drake.control.baselines.controller import BaselineController
         from aerial_drake.control.reference_pose import body_offset_in_heading_frame
         assert model.task is not None
         return BaselineController(
             model.plant, model.base_body, model.end_effector_frame, model.task,
             scenario.gains, kind=kind,
-            body_offset_H=body_offset_in_heading_frame(scenario, model),
+            body_offset_H=body_offset_in_heading_frame(scenario, model, reference),
             params=scenario.controller.baseline, period=scenario.controller_period)
     return factory
 
@@ -82,3 +87,16 @@ def controller_factory(scenario: Any) -> ControllerFactory:
         raise KeyError(f"controller.type: '{scenario.controller.type}' is not one of "
                        f"{controller_types()} (register your own with aerial_drake."
                        "control.registry.register_controller)") from None
+
+
+def make_controller_system(factory: ControllerFactory, scenario: Any, model: AerialManipulator,
+                           reference: ReferenceSource):
+    """``factory(scenario, model)``, with ``reference=`` the run's reference if the factory
+    takes that keyword (the baselines' do: their body offset is measured on it)."""
+    try:
+        takes_reference = "reference" in inspect.signature(factory).parameters
+    except (TypeError, ValueError):  # a callable without a signature Python can read
+        takes_reference = False
+    if takes_reference:
+        return factory(scenario, model, reference=reference)  # type: ignore[call-arg]
+    return factory(scenario, model)

@@ -11,9 +11,11 @@ from aerial_drake.control.registry import (
     ControllerFactory,
     controller_factory,
     controller_types,
+    make_controller_system,
     register_controller,
     zero_controller,
 )
 
 __all__ = ["PAPER_CONTROLLER", "ControllerFactory", "body_offset_in_heading_frame",
-           "controller_factory", "controller_types", "register_controller", "zero_controller"]
+           "controller_factory", "controller_types", "make_controller_system",
+           "register_controller", "zero_controller"]

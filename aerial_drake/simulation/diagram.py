@@ -39,7 +39,7 @@ from pydrake.systems.primitives import (
 
 from aerial_drake.control.controller import DecoupledController
 from aerial_drake.control.interface import check_controller_ports
-from aerial_drake.control.registry import ControllerFactory
+from aerial_drake.control.registry import ControllerFactory, make_controller_system
 from aerial_drake.control.registry import controller_factory as scenario_controller_factory
 from aerial_drake.robots.models import AerialManipulator, add_to_builder
 from aerial_drake.simulation.actuators import (
@@ -54,6 +54,7 @@ from aerial_drake.simulation.scenarios import Scenario
 from aerial_drake.simulation.sensing import add_state_sensor
 from aerial_drake.simulation.wind import add_wind
 from aerial_drake.trajectories.generator import ReferenceGenerator
+from aerial_drake.trajectories.kinds import reference_of
 
 
 @dataclass
@@ -205,7 +206,7 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
     """The closed loop of ``scenario`` as one Diagram with exported disturbance inputs.
 
     ``controller_factory`` (``factory(scenario, model) -> system``,
-    :mod:`aerial_drake.simulation.controllers`; e.g. its ``zero_controller``, the benchmarks'
+    :mod:`aerial_drake.control.registry`; e.g. its ``zero_controller``, the benchmarks'
     baseline) overrides the scenario's ``controller.type``.
     """
     builder = DiagramBuilder()
@@ -234,15 +235,17 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
     model = scenario.controller_model()
     n = model.n
 
-    reference = builder.AddSystem(ReferenceGenerator(
-        scenario.trajectory, joint_defaults=model.task_joint_nominal()))
+    # The run's reference, built once: the checks, the start posture, the logs and Meshcat
+    # read this same object (``reference.source``).
+    source = reference_of(scenario.trajectory, model.task_joint_nominal())
+    reference = builder.AddSystem(ReferenceGenerator(source))
     reference.set_name("reference")
     # Sampling: the paper's controller runs at 1 kHz and holds its command between samples
     # (its own discrete state); period 0 means continuous feedback.
     # The controller: the scenario's ``controller.type`` (default the paper's), or the
-    # caller's factory (aerial_drake.simulation.controllers).
+    # caller's factory (aerial_drake.control.registry).
     factory = controller_factory or scenario_controller_factory(scenario)
-    system = factory(scenario, model)
+    system = make_controller_system(factory, scenario, model, source)
     assert model.task is not None
     check_controller_ports(system, model.plant.num_multibody_states(), n, model.task.n_joints)
     controller = builder.AddSystem(system)
@@ -331,8 +334,8 @@ def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: 
 
 #: The closed loop's outputs logged at every sample. The references are not among them: they
 #: are functions of time alone, recomputed after the run from the sample times by the same
-#: compiled code (:func:`aerial_drake.trajectories.kinds.sample_reference`, equal to the last
-#: bit), so nothing evaluates them in the loop but the controller.
+#: compiled code (the run's ``ReferenceGenerator.source``, equal to the last bit), so nothing
+#: evaluates them in the loop but the controller.
 LOGGED_PORTS = ("plant_state", "command", "applied_command", "diagnostics", "rotor_drive_torque")
 
 
@@ -349,10 +352,10 @@ def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = Non
     scenario = resolve_random_disturbances(scenario)
     loop = add_closed_loop(builder, scenario, controller_factory=controller_factory)
     sim = loop.simulated_plant
-    for target, port in (("helicopter", "helicopter_wrench"),
+    for target, port in (("vehicle", "helicopter_wrench"),
                          ("end_effector", "end_effector_wrench")):
         wrench = add_wrench_source(builder, scenario.disturbances, target).get_output_port()
-        if target == "helicopter":  # the wind's drag acts beside the windows (wind.py)
+        if target == "vehicle":  # the wind's drag acts beside the windows (wind.py)
             wrench = add_wind(builder, scenario.wind, scenario.duration, sim.plant,
                               sim.base_body, wrench)
         builder.Connect(wrench, loop.input_port(port))

@@ -5,11 +5,11 @@ ScenarioError naming the time, the cause and the fields to change.
 
 Sampling (docs/control.md, "Checks before a run"):
 
-- thrust, reach and smoothness every :data:`SAMPLE_PERIOD` = 10 ms, vectorised through
-  :func:`~aerial_drake.trajectories.kinds.sample_reference` (any reference kind). The paper's
-  fastest terms turn at 3 rad/s, so a sampled peak of |f_d| is within (3 x 0.01)^2 / 8 = 1e-4
-  of the true one, and the worst sample is then refined at 0.5 ms; a discontinuity is bisected
-  down to microseconds (:mod:`.continuity`);
+- thrust, reach and smoothness every :data:`SAMPLE_PERIOD` = 10 ms, vectorised through the
+  run's :class:`~aerial_drake.trajectories.base.ReferenceSource` (any reference kind). The
+  paper's fastest terms turn at 3 rad/s, so a sampled peak of |f_d| is within
+  (3 x 0.01)^2 / 8 = 1e-4 of the true one, and the worst sample is then refined at 0.5 ms; a
+  discontinuity is bisected down to microseconds (:mod:`aerial_drake.trajectories.continuity`);
 - the posture that realises the task every :data:`POSTURE_PERIOD` = 50 ms (20 Hz), as each
   configuration costs a Newton solve (about a millisecond, from the previous sample's), and
   every sampled local minimum of sigma_min(J_3) below :data:`REFINE_BELOW` margins is
@@ -33,10 +33,11 @@ from aerial_drake.dynamics.equilibrium import (
     track_configuration,
 )
 from aerial_drake.robots.models import AerialManipulator, nominal_end_effector_offset
-from aerial_drake.simulation.continuity import find_discontinuity
 from aerial_drake.simulation.diagram import input_limits
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
-from aerial_drake.trajectories.kinds import sample_reference
+from aerial_drake.trajectories.base import ReferenceSource
+from aerial_drake.trajectories.continuity import find_discontinuity
+from aerial_drake.trajectories.kinds import reference_of
 from aerial_drake.trajectories.reference import ReferenceSample
 
 #: Period of the reference samples for thrust, reach and smoothness (s).
@@ -51,15 +52,18 @@ SIGMA_MARGIN_FACTOR = 3.0
 REFINE_BELOW = 10.0
 
 
-def check_reference(scenario: Scenario, model: AerialManipulator) -> None:
+def check_reference(scenario: Scenario, model: AerialManipulator,
+                    reference: ReferenceSource | None = None) -> None:
     """Raise ScenarioError at the first way the whole reference of ``scenario`` is not
     feasible for ``model`` (the controller's): a discontinuity in a derivative the law needs,
     a thrust above the limit or below Assumption 2's threshold, the end effector out of the
     arm's reach, or Assumption 1 (sigma_min(J_3) above its margin) failing at the posture
-    that realises the task. Sampling: the module docstring."""
+    that realises the task. ``reference``: the run's reference (None: built from
+    ``scenario.trajectory``). Sampling: the module docstring."""
+    reference = _source(scenario, model, reference)
     times = sample_times(scenario.duration, SAMPLE_PERIOD)
-    ref = _sample(scenario, model, times)
-    found = find_discontinuity(lambda t: _sample(scenario, model, t), times)
+    ref = reference.sample(times)
+    found = find_discontinuity(reference.sample, times)
     if found is not None:
         raise ScenarioError(
             f"trajectory: the reference is not smooth enough for the law: {found.describe()}. "
@@ -67,9 +71,9 @@ def check_reference(scenario: Scenario, model: AerialManipulator) -> None:
             "to the 2nd, b1d up to the 2nd, each continuous and the rate of the one below: "
             "give a smoother reference (splines of higher degree, or correct derivatives)",
             "trajectory")
-    check_thrust(scenario, model, ref, times)
+    check_thrust(scenario, model, ref, times, reference=reference)
     _check_reach(model, ref, times, model.description.workspace_radius)
-    check_postures(scenario, model)
+    check_postures(scenario, model, reference=reference)
 
 
 def sample_times(duration: float, period: float) -> np.ndarray:
@@ -78,10 +82,12 @@ def sample_times(duration: float, period: float) -> np.ndarray:
     return np.linspace(0.0, duration, count + 1)
 
 
-def _sample(scenario: Scenario, model: AerialManipulator, times: np.ndarray
-            ) -> ReferenceSample:
-    return sample_reference(scenario.trajectory, np.asarray(times, dtype=float),
-                            model.task_joint_nominal())
+def _source(scenario: Scenario, model: AerialManipulator,
+            reference: ReferenceSource | None) -> ReferenceSource:
+    """``reference``, or (None) the one ``scenario.trajectory`` describes for ``model``."""
+    if reference is not None:
+        return reference
+    return reference_of(scenario.trajectory, model.task_joint_nominal())
 
 
 def _thrust_needed(m: float, g: float, ref: ReferenceSample) -> np.ndarray:
@@ -90,15 +96,18 @@ def _thrust_needed(m: float, g: float, ref: ReferenceSample) -> np.ndarray:
 
 
 def check_thrust(scenario: Scenario, model: AerialManipulator, ref: ReferenceSample,
-                 times: np.ndarray) -> None:
+                 times: np.ndarray, *, reference: ReferenceSource | None = None) -> None:
     """Raise ScenarioError if the thrust the reference needs, |m (x_d'' + g e3)| (10), leaves
     [max(thrust minimum, f_d_limit), thrust maximum] (the robot's limits or the scenario's
-    actuation overrides, as the run saturates them; no upper bound if it does not saturate)."""
+    actuation overrides, as the run saturates them; no upper bound if it does not saturate).
+    ``ref``: the reference sampled at ``times``; ``reference``: the one sampled (None: built
+    from ``scenario.trajectory``), refined near the extremes."""
+    reference = _source(scenario, model, reference)
     m, g = mass_and_gravity(model)
     lower, upper = input_limits(scenario, model)
     thrust_max, thrust_min = float(upper[0]), float(lower[0])
     f = _thrust_needed(m, g, ref)
-    worst = _refined_extreme(scenario, model, m, g, times, int(np.argmax(f)), np.max)
+    worst = _refined_extreme(reference, m, g, times, int(np.argmax(f)), np.max)
     if worst[1] > thrust_max:
         t, need = worst
         raise ScenarioError(
@@ -108,7 +117,7 @@ def check_thrust(scenario: Scenario, model: AerialManipulator, ref: ReferenceSam
             "actuation.thrust_max), with nothing left for feedback: slow the reference's CoM "
             "motion (smaller or slower trajectory amplitudes) or raise actuation.thrust_max",
             "trajectory")
-    t, need = _refined_extreme(scenario, model, m, g, times, int(np.argmin(f)), np.min)
+    t, need = _refined_extreme(reference, m, g, times, int(np.argmin(f)), np.min)
     for bound, what in ((scenario.f_d_limit, "Assumption 2's threshold f_d_limit"),
                         (thrust_min, "the thrust minimum (limits.thrust or "
                                      "actuation.thrust_min)")):
@@ -122,30 +131,32 @@ def check_thrust(scenario: Scenario, model: AerialManipulator, ref: ReferenceSam
                 "trajectory")
 
 
-def _refined_extreme(scenario: Scenario, model: AerialManipulator, m: float, g: float,
-                     times: np.ndarray, k: int, pick) -> tuple[float, float]:
+def _refined_extreme(reference: ReferenceSource, m: float, g: float, times: np.ndarray,
+                     k: int, pick) -> tuple[float, float]:
     """(time, |f_d|) of the extreme (``pick``: np.max or np.min) near sample ``k``, from
     samples 0.5 ms apart over the neighbouring intervals."""
     h = float(times[1] - times[0])
     fine = np.linspace(max(times[k] - h, 0.0), min(times[k] + h, times[-1]), 41)
-    f = _thrust_needed(m, g, _sample(scenario, model, fine))
+    f = _thrust_needed(m, g, reference.sample(fine))
     i = int(np.argmax(f)) if pick is np.max else int(np.argmin(f))
     return float(fine[i]), float(f[i])
 
 
 def check_workspace(scenario: Scenario, model: AerialManipulator, *,
-                    radius: float | None = None, rate: float = 50.0) -> None:
+                    radius: float | None = None, rate: float = 50.0,
+                    reference: ReferenceSource | None = None) -> None:
     """Raise ScenarioError if the reference leaves the arm's workspace at any sampled time
     (``rate`` samples per second; :func:`check_reference` checks it at 100 Hz).
 
     The arm holds the end effector at a fixed offset from the system CoM in the heading frame
     (x_d = x_c + R3(phi4) r_o, (33)); the task is feasible while the desired offset
     R3(phi4)^T (p_ed - x_d) stays within ``radius`` of the model's nominal one (default: the
-    robot description's ``workspace_radius``).
+    robot description's ``workspace_radius``). ``reference``: the run's reference (None:
+    built from ``scenario.trajectory``).
     """
     radius = model.description.workspace_radius if radius is None else radius
     times = np.linspace(0.0, scenario.duration, int(scenario.duration * rate) + 1)
-    _check_reach(model, _sample(scenario, model, times), times, radius)
+    _check_reach(model, _source(scenario, model, reference).sample(times), times, radius)
 
 
 def _check_reach(model: AerialManipulator, ref: ReferenceSample, times: np.ndarray,
@@ -170,7 +181,8 @@ def _check_reach(model: AerialManipulator, ref: ReferenceSample, times: np.ndarr
 
 
 def check_postures(scenario: Scenario, model: AerialManipulator,
-                   period: float = POSTURE_PERIOD) -> float:
+                   period: float = POSTURE_PERIOD, *,
+                   reference: ReferenceSource | None = None) -> float:
     """Raise ScenarioError if no posture realises the reference at a sampled time (out of
     reach), or if sigma_min(J_3) there is below SIGMA_MARGIN_FACTOR x the scenario's
     sigma_min_J3_limit (Assumption 1 along the reference). Returns the smallest sigma found.
@@ -178,11 +190,13 @@ def check_postures(scenario: Scenario, model: AerialManipulator,
     The postures are tracked: each sample's Newton solve starts from the previous one's
     (:func:`~aerial_drake.dynamics.equilibrium.track_configuration`), with the full solve
     as the fallback; J_3 comes from kinematics alone
-    (:func:`~aerial_drake.dynamics.equilibrium.kinematic_J3`)."""
+    (:func:`~aerial_drake.dynamics.equilibrium.kinematic_J3`). ``reference``: the run's
+    reference (None: built from ``scenario.trajectory``)."""
+    reference = _source(scenario, model, reference)
     times = sample_times(scenario.duration, period)
     margin = SIGMA_MARGIN_FACTOR * scenario.sigma_min_J3_limit
     tracker = _PostureTracker(model)
-    ref = _sample(scenario, model, times)
+    ref = reference.sample(times)
     q = [tracker.solve(float(t), _at(ref, k)) for k, t in enumerate(times)]
     sigma = np.array(tracker.sigmas)
     worst = int(np.argmin(sigma))
@@ -191,7 +205,7 @@ def check_postures(scenario: Scenario, model: AerialManipulator,
     for k in 1 + np.flatnonzero(inner & (sigma[1:-1] < REFINE_BELOW * margin)):
         tracker.restart(q[k - 1])
         fine = np.linspace(times[k - 1], times[k + 1], 21)[1:]
-        fine_ref = _sample(scenario, model, fine)
+        fine_ref = reference.sample(fine)
         for i, t in enumerate(fine):
             tracker.solve(float(t), _at(fine_ref, i))
             if tracker.sigmas[-1] < s_worst:

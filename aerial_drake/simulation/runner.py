@@ -50,7 +50,6 @@ from aerial_drake.simulation.outputs import (
 from aerial_drake.simulation.perturbations import start_perturbations
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
 from aerial_drake.simulation.scenarios.checks import REALTIME, estimated_log_mb, number
-from aerial_drake.trajectories.kinds import sample_reference
 from aerial_drake.trajectories.paper import compile_reference
 
 #: Diagnostics entries that do not depend on the task's size (diagnostics_layout(0)).
@@ -98,7 +97,7 @@ def set_initial_state(scenario: Scenario, loop: ClosedLoop, plant_context: Conte
     """The reference configuration at t = 0 with the scenario's documented offsets, at rest
     (rotors, if any, already at speed)."""
     model, sim = loop.controller_model, loop.simulated_plant
-    q_model = reference_configuration(scenario, model)
+    q_model = reference_configuration(scenario, model, reference=loop.reference.source)
     ctx = model.plant.CreateDefaultContext()
     model.plant.SetPositions(ctx, q_model)
     X_WB = model.plant.EvalBodyPoseInWorld(ctx, model.base_body)
@@ -226,8 +225,7 @@ def _collect_log(scenario: Scenario, loop: ClosedLoop, loggers: dict[str, Vector
         arrays[port] = entry.data().T
     n = min(len(v) for v in arrays.values())
     arrays = {k: v[:n] for k, v in arrays.items()}
-    references = sample_reference(scenario.trajectory, arrays["t"],
-                                  loop.controller_model.task_joint_nominal()).to_vectors()
+    references = loop.reference.source.sample(arrays["t"]).to_vectors()
     arrays.update(zip(("com_reference", "task_reference", "heading_reference"), references))
     if _period(loop.controller) > 0 and n > 0:
         arrays = _align_held_diagnostics(arrays, loop)
@@ -301,7 +299,7 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     SIGINT (Ctrl-C), SIGTERM and SIGHUP stop the run the same way, with
     :class:`SimulationInterrupted`; one arriving while the files are written is held until
     they are complete. ``controller_factory`` (``factory(scenario, model) -> system``,
-    :mod:`aerial_drake.simulation.controllers`) overrides the scenario's ``controller.type``.
+    :mod:`aerial_drake.control.registry`) overrides the scenario's ``controller.type``.
     ``before_start()`` is called once everything is built and the initial state set, just
     before the simulation (and its wall clock) starts: e.g. to wait for a browser to open the
     live view. ``extra_files()`` gives more ``{name: text}`` files for the run's folder (e.g.
@@ -338,7 +336,7 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
     if lock is not None:
         _note_replaced_results(scenario, lock.folder, stream)
     builder, loop, loggers = build_simulation(scenario, controller_factory=controller_factory)
-    check_reference(scenario, loop.controller_model)
+    check_reference(scenario, loop.controller_model, loop.reference.source)
     if getattr(loop.controller, "compiled", True) is False:
         # Said once: every valid description is compiled today (quaternion base, revolute
         # and weld joints); this is for a structure a later change admits.

@@ -10,17 +10,14 @@ paper,uncoupled,static_compensation`` (or :func:`run_compare`) writes::
 The runs are independent simulations: with ``jobs`` > 1 they run in a process pool of that
 many workers ("spawn" processes, each loading the scenario and the numba cache afresh, about
 5 s of start-up each), else one after the other in this process with progress lines. A
-controller registered in this process (:func:`aerial_drake.simulation.controllers.
+controller registered in this process (:func:`aerial_drake.control.registry.
 register_controller`) is unknown to spawned workers: compare it with ``jobs=1``.
 """
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import functools
-import os
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TextIO
@@ -29,11 +26,10 @@ import numpy as np
 
 from aerial_drake.simulation.metrics import RESPONSE_TAIL_S
 from aerial_drake.simulation.outputs import OutputError, strict_json, write_text_atomically
+from aerial_drake.simulation.run_folder import Run
 from aerial_drake.simulation.scenarios import ScenarioError, folder_name, load_scenario
-from aerial_drake.studies.paper import format_table, run_batch
-from aerial_drake.studies.reporting import report_error, report_exception
-from aerial_drake.viz.compare import write_compare_figures
-from aerial_drake.viz.plots import Run
+from aerial_drake.studies.batch import run_batch
+from aerial_drake.studies.summary import format_table
 
 DEFAULT_CONTROLLERS = ("paper", "uncoupled", "static_compensation")
 
@@ -54,8 +50,10 @@ class CompareResult:
 
 
 def _scenario_for(scenario: str, controller: str, duration: float | None,
-                  undisturbed: bool = False):
-    overrides: dict = {"duration": duration} if duration is not None else {}
+                  undisturbed: bool = False, overrides: dict | None = None):
+    overrides = dict(overrides or {})
+    if duration is not None:
+        overrides["duration"] = duration
     base = load_scenario(scenario, overrides=overrides or None)
     if undisturbed:  # the same run without its disturbance windows, under its own name
         base = dataclasses.replace(base, name=f"{base.name}_undisturbed", disturbances=[])
@@ -63,10 +61,11 @@ def _scenario_for(scenario: str, controller: str, duration: float | None,
     return dataclasses.replace(base, controller=config).validate()
 
 
-def _rebuild(scenario: str, duration: float | None, undisturbed: bool, controller: str):
+def _rebuild(scenario: str, duration: float | None, undisturbed: bool,
+             overrides: dict | None, controller: str):
     """:func:`_scenario_for` with the controller last, for a worker process (picklable with
     functools.partial; a Scenario itself does not pickle)."""
-    return _scenario_for(scenario, controller, duration, undisturbed)
+    return _scenario_for(scenario, controller, duration, undisturbed, overrides)
 
 
 def _controller_folders(out: Path, controllers: tuple[str, ...]) -> dict[str, Path]:
@@ -86,12 +85,14 @@ def _controller_folders(out: Path, controllers: tuple[str, ...]) -> dict[str, Pa
 def run_compare(scenario: str, controllers: tuple[str, ...] = DEFAULT_CONTROLLERS,
                 out_dir: str | Path = "out/compare", duration: float | None = None, *,
                 jobs: int = 1, progress: bool = True, stream: TextIO | None = None,
-                undisturbed: bool = False) -> CompareResult:
+                undisturbed: bool = False, overrides: dict | None = None) -> CompareResult:
     """Run ``scenario`` (a shipped name or a YAML path) once per controller into
     ``out_dir/<scenario folder name>/<controller>/`` and write the overlays and the table
     there (the folder names sanitised as ``run``'s: Scenario.folder_name).
     ``undisturbed``: the scenario without its disturbance windows (named
     ``<name>_undisturbed``), the reference of :func:`disturbance_displacement`.
+    ``overrides`` replaces more top-level fields of the scenario (``duration`` wins over one
+    there).
 
     Every scenario is built and checked before anything runs (ScenarioError,
     UnreachablePose); an output folder that cannot be used raises OutputError. A controller
@@ -99,13 +100,13 @@ def run_compare(scenario: str, controllers: tuple[str, ...] = DEFAULT_CONTROLLER
     signal (SIGINT, SIGTERM, SIGHUP) stops the comparison as it stops ``run paper``: the
     running run(s) write their logs, the remaining controllers are not started, no figure,
     summary or comparison is written, and :attr:`CompareResult.interrupted` holds the
-    signal's number (:func:`aerial_drake.studies.paper.run_batch`, also with ``jobs`` > 1).
+    signal's number (:func:`aerial_drake.studies.batch.run_batch`, also with ``jobs`` > 1).
     Only complete run folders (``metrics.json`` present) are loaded and drawn."""
     if not controllers:
         raise ScenarioError("--controllers: name at least one controller")
     if len(set(controllers)) != len(controllers):
         raise ScenarioError(f"--controllers: a controller is named twice: {list(controllers)}")
-    scenarios = {name: _scenario_for(scenario, name, duration, undisturbed)
+    scenarios = {name: _scenario_for(scenario, name, duration, undisturbed, overrides)
                  for name in controllers}  # every name checked before anything runs
     first = scenarios[controllers[0]]
     out = Path(out_dir) / first.folder_name
@@ -117,7 +118,8 @@ def run_compare(scenario: str, controllers: tuple[str, ...] = DEFAULT_CONTROLLER
                           "choose another --out") from None
     result = CompareResult(out_dir=out)
     batch = run_batch(scenarios, folders, jobs=jobs,
-                      rebuild=functools.partial(_rebuild, scenario, duration, undisturbed),
+                      rebuild=functools.partial(_rebuild, scenario, duration, undisturbed,
+                                                overrides),
                       progress=progress, stream=stream,
                       labels={n: f"'{first.name}' with controller '{n}'" for n in controllers})
     result.runs, result.failures, result.interrupted = (batch.runs, batch.failures,
@@ -127,6 +129,7 @@ def run_compare(scenario: str, controllers: tuple[str, ...] = DEFAULT_CONTROLLER
     if result.interrupted is not None:
         return result
     if result.runs:
+        from aerial_drake.viz.compare import write_compare_figures  # (matplotlib: here only)
         result.figures = write_compare_figures(out, result.runs, first.name)
     write_text_atomically(out / "summary.txt", result.table + "\n")
     write_text_atomically(out / "comparison.json", strict_json(comparison_summary(metrics)))
@@ -187,34 +190,3 @@ def disturbance_displacement(disturbed: Run, undisturbed: Run,
                     "ee_moved_max_m": float(ee[mask].max()) if mask.any() else None,
                     "com_moved_max_m": float(com[mask].max()) if mask.any() else None})
     return out
-
-
-def cli_compare(args: argparse.Namespace) -> int:
-    """``aerial-drake compare SCENARIO [--controllers A,B] [--jobs N] [--duration S]
-    [--out DIR] [--quiet] [--json]``. Exit statuses as ``run``'s (docs/reliability.md): 2 bad
-    input or output folder, 3 results not written, 128 + n stopped by signal n, 1 a run
-    failed. With ``--json`` stdout holds only JSON (comparison.json's content, or an error
-    object); the table and the "wrote" lines go to stderr."""
-    controllers = tuple(c.strip() for c in args.controllers.split(",") if c.strip())
-    jobs = args.jobs if args.jobs is not None else min(len(controllers), os.cpu_count() or 1)
-    try:
-        result = run_compare(args.scenario, controllers, Path(args.out) / "compare",
-                             args.duration, jobs=jobs, progress=not args.quiet,
-                             stream=sys.stderr, undisturbed=args.undisturbed)
-    except Exception as err:  # the foreseen ones get their status; a bug is raised again
-        return report_exception(args, err)
-    if result.interrupted is not None:
-        return report_error(args, 128 + result.interrupted, "; ".join(result.failures.values()),
-                            f"logs up to the interruption are in {result.out_dir}")
-    human = sys.stderr if args.json else sys.stdout
-    print(result.table, file=human)
-    for path in result.figures:
-        if path.suffix == ".png":
-            print(f"wrote {path} (and .pdf)", file=human)
-    print(f"wrote {result.out_dir / 'summary.txt'} and {result.out_dir / 'comparison.json'}",
-          file=human)
-    if args.json:
-        print(strict_json(comparison_summary({n: r.metrics for n, r in result.runs.items()})))
-    for name, reason in result.failures.items():
-        print(f"error: {name}: {reason}", file=sys.stderr)
-    return 0 if result.completed else 1

@@ -1,5 +1,7 @@
 """Reference trajectories: the reference sample and its packed vectors (:mod:`.reference`),
 the ``trajectory:`` section (:mod:`.params`), the kinds (paper (27)-(33) :mod:`.paper`, hover
-:mod:`.hover`, waypoints :mod:`.waypoints`, python :mod:`.python_kind`) behind one entry point
-(:mod:`.kinds`: ``reference_of``, ``evaluate_reference``, ``sample_reference``), and the Drake
-source of any of them (:mod:`.generator`, ``ReferenceGenerator``)."""
+:mod:`.hover`, waypoints :mod:`.waypoints`, python :mod:`.python_kind`) in one registry with
+one entry point (:mod:`.kinds`: ``REFERENCE_KINDS``, ``validate_trajectory``,
+``reference_of``), the Drake source of any of them (:mod:`.generator`,
+``ReferenceGenerator``), and the test that a sampled reference is as smooth as the law needs
+(:mod:`.continuity`)."""

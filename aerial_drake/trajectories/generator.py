@@ -1,5 +1,7 @@
 """The reference trajectory as a Drake system: :class:`ReferenceGenerator`."""
 
+from __future__ import annotations
+
 import copy
 
 from pydrake.systems.framework import BasicVector, Context, Diagram, DiagramBuilder, LeafSystem
@@ -39,8 +41,11 @@ class ReferenceGenerator(Diagram):
     :mod:`aerial_drake.trajectories.reference`): ``com_reference`` (15), ``task_reference``
     (24 + 3 n_j: 27 for the paper's task), ``heading_reference`` (9).
 
-    ``joint_defaults``: the desired angles of the task's joint components when the
-    parameters' ``joint_targets`` is empty (the robot's nominal posture there).
+    ``reference``: the run's :class:`~aerial_drake.trajectories.base.ReferenceSource` (built
+    once by :func:`~aerial_drake.trajectories.kinds.reference_of` and shared with the run's
+    checks and logs, :attr:`source`), or the ``trajectory:`` section's parameters to build it
+    from; ``joint_defaults``, with parameters: the desired angles of the task's joint
+    components when their ``joint_targets`` is empty (the robot's nominal posture there).
 
     A small Diagram: the three are computed together, once per time, by one compiled call in
     a LeafSystem with a single output, and Drake's Demultiplexer splits them. The controller
@@ -51,10 +56,15 @@ class ReferenceGenerator(Diagram):
     linearise a diagram about a hover point with a ConstantVectorSource in its place.
     """
 
-    def __init__(self, params: TrajectoryParams, joint_defaults=None):
+    def __init__(self, reference: TrajectoryParams | ReferenceSource, joint_defaults=None):
         super().__init__()
-        source = reference_of(params, joint_defaults)
-        self._params = copy.deepcopy(params)
+        if isinstance(reference, ReferenceSource):
+            source, self._params = reference, None
+        else:
+            source, self._params = reference_of(reference, joint_defaults), copy.deepcopy(
+                reference)
+        #: The reference this system outputs (the same object, not a copy).
+        self.source = source
         self.n_joints = source.n_joints
         builder = DiagramBuilder()
         packed = builder.AddSystem(_PackedReference(source))
@@ -69,8 +79,9 @@ class ReferenceGenerator(Diagram):
         builder.BuildInto(self)
         self._com_port, self._task_port, self._heading_port = map(self.GetOutputPort, names)
 
-    def params(self) -> TrajectoryParams:
-        """A copy of the parameters this system was built with."""
+    def params(self) -> TrajectoryParams | None:
+        """A copy of the parameters this system was built with (None if built from a
+        ReferenceSource)."""
         return copy.deepcopy(self._params)
 
     def get_com_reference_output_port(self):

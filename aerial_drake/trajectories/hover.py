@@ -15,15 +15,13 @@ __all__ = ["HoverReference"]
 
 class HoverReference(ReferenceSource):
     """Constant CoM, heading and task; every derivative zero. Without ``com`` the CoM is
-    rule (33) at the hover point, ee_position + R3(heading) ``com_offset``."""
+    rule (33) at the hover point, ee_position + R3(heading) ``com_offset``. ``params``
+    already checked (:func:`aerial_drake.trajectories.kinds.reference_of` does)."""
 
     kind = "hover"
 
     def __init__(self, params: HoverParams, joint_targets: np.ndarray,
                  com_offset: np.ndarray) -> None:
-        errors = params.errors()
-        if errors:
-            raise ValueError("Invalid hover: " + "; ".join(errors) + ".")
         joint_targets = np.asarray(joint_targets, dtype=float)
         super().__init__(joint_targets.size)
         phi = np.array([float(params.heading), 0.0, 0.0, 0.0, 0.0])

@@ -56,11 +56,18 @@ def joint_targets(params: TrajectoryParams, defaults=None) -> np.ndarray:
 
 def constants(params: TrajectoryParams, joint_defaults=None) -> np.ndarray:
     """The constants array the compiled formulas read: :class:`_Constants` then the joint
-    targets (see :func:`_joint_targets` for ``joint_defaults``)."""
-    params.validate()
+    targets (see :func:`joint_targets` for ``joint_defaults``). ValueError naming the field
+    if ``params`` is not a valid paper kind."""
     if params.kind != "paper":
         raise ValueError(f"trajectory kind '{params.kind}' is not the paper's (28)-(33): use "
                          "aerial_drake.trajectories.kinds.reference_of for any kind")
+    errors = params.errors()
+    if errors:
+        raise ValueError("Invalid TrajectoryParams: " + "; ".join(errors) + ".")
+    return _constants(params, joint_defaults)
+
+
+def _constants(params: TrajectoryParams, joint_defaults=None) -> np.ndarray:
     return np.concatenate([_Constants.from_params(params).as_array(),
                            joint_targets(params, joint_defaults)])
 
@@ -96,12 +103,13 @@ def sample_reference(params: TrajectoryParams, times: np.ndarray, joint_defaults
 
 
 class PaperReference(ReferenceSource):
-    """``kind: paper``: (28)-(33) by the compiled formulas."""
+    """``kind: paper``: (28)-(33) by the compiled formulas, from ``params`` already checked
+    (:func:`aerial_drake.trajectories.kinds.reference_of` does; :func:`constants` checks)."""
 
     kind = "paper"
 
     def __init__(self, params: TrajectoryParams, joint_defaults=None) -> None:
-        self.constants = constants(params, joint_defaults)
+        self.constants = _constants(params, joint_defaults)
         super().__init__(self.constants.size - _N_CONSTANTS)
 
     def fill(self, t: float, out: np.ndarray) -> None:

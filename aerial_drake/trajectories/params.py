@@ -1,7 +1,8 @@
 """The scenario's ``trajectory:`` section: which reference kind flies and its numbers
 (:class:`TrajectoryParams`, loadable by ``pydrake.common.yaml.yaml_load_typed``).
 
-Kinds (``kind``; docs/trajectories.md):
+Kinds (``kind``; docs/trajectories.md; the registry of kinds, and the one validation of the
+section, is :mod:`aerial_drake.trajectories.kinds`):
 
 - ``paper`` (default): the paper's (28)-(33), constants in the top-level fields
   (:mod:`aerial_drake.trajectories.paper`);
@@ -24,11 +25,9 @@ import typing
 
 import numpy as np
 
-__all__ = ["KINDS", "TrajectoryParams", "HoverParams", "Waypoint", "WaypointsParams",
+__all__ = ["TrajectoryParams", "HoverParams", "Waypoint", "WaypointsParams",
            "PythonParams", "COM_RULES", "HEADING_RULES"]
 
-#: The reference kinds a scenario's ``trajectory.kind`` may name.
-KINDS = ("paper", "hover", "waypoints", "python")
 #: How the waypoints kind finds the CoM: rule (33) from the end-effector path, or its own
 #: waypoints.
 COM_RULES = ("offset", "waypoints")
@@ -67,7 +66,9 @@ class HoverParams:
     # The CoM, World [x, y, z] (m); empty: rule (33), ee_position + R3(heading) com_offset.
     com: typing.List[float] = dataclasses.field(default_factory=list)
 
-    def errors(self, prefix: str = "hover.") -> list[str]:
+    def errors(self, n_joints: int | None = None, prefix: str = "hover.") -> list[str]:
+        """What is wrong with the section (``n_joints``: unused, the kinds' common
+        signature)."""
         found = [_vector_error(prefix + "ee_position", self.ee_position, 3, "[x, y, z] in m"),
                  _vector_error(prefix + "ee_rpy", self.ee_rpy, 3, "[a, b, c] in rad")]
         if self.com:
@@ -116,6 +117,8 @@ class WaypointsParams:
     heading_angle: float = 0.0
 
     def errors(self, n_joints: int | None = None, prefix: str = "waypoints.") -> list[str]:
+        """What is wrong with the section; ``n_joints``: the task's joint components (each
+        waypoint's ``joints`` has as many), None: not checked."""
         found: list[str | None] = []
         if self.com not in COM_RULES:
             found.append(f"'{prefix}com' must be one of {COM_RULES}, got {self.com!r}")
@@ -188,7 +191,9 @@ class PythonParams:
     # A folder added to the import path first (relative to the scenario file); empty: none.
     path: str = ""
 
-    def errors(self, prefix: str = "python.") -> list[str]:
+    def errors(self, n_joints: int | None = None, prefix: str = "python.") -> list[str]:
+        """What is wrong with the section (``n_joints``: unused, the kinds' common
+        signature)."""
         if not isinstance(self.function, str) or self.function.count(":") != 1 or not all(
                 part.strip() for part in self.function.split(":")):
             return [f"'{prefix}function' must be 'module:name' (e.g. 'my_paths:inspection'), "
@@ -202,10 +207,11 @@ class TrajectoryParams:
     paper kind's (28)-(33) (defaults: the paper's values).
 
     Loadable by ``pydrake.common.yaml.yaml_load_typed`` (a misspelt key is an error).
-    Call :meth:`validate` before use (:class:`ReferenceGenerator` and the pure functions do).
+    Checked by :func:`aerial_drake.trajectories.kinds.validate_trajectory` (the kind and its
+    section; :func:`~aerial_drake.trajectories.kinds.reference_of` calls it once per build).
     """
 
-    # The reference kind: one of KINDS (docs/trajectories.md).
+    # The reference kind: one of aerial_drake.trajectories.kinds.KINDS (docs/trajectories.md).
     kind: str = "paper"
     # Centre of the basic motion, World [x, y, z] (m).
     center: typing.List[float] = dataclasses.field(default_factory=lambda: [0.6, 0.0, 1.3])
@@ -240,18 +246,11 @@ class TrajectoryParams:
     waypoints: WaypointsParams = dataclasses.field(default_factory=WaypointsParams)
     python: PythonParams = dataclasses.field(default_factory=PythonParams)
 
-    def validate(self) -> None:
-        """Raises ValueError naming every bad field and how to fix it."""
+    def errors(self) -> list[str]:
+        """What is wrong with the fields every kind shares and the paper kind's (the kind's
+        name and its own section: :func:`aerial_drake.trajectories.kinds.validate_trajectory`),
+        one message per field naming it and the fix."""
         errors = []
-        if self.kind not in KINDS:
-            raise ValueError(f"Invalid TrajectoryParams: 'kind' must be one of {KINDS}, got "
-                             f"{self.kind!r}.")
-        if self.kind == "hover":
-            errors += self.hover.errors()
-        elif self.kind == "waypoints":
-            errors += self.waypoints.errors()
-        elif self.kind == "python":
-            errors += self.python.errors()
         for name, meaning in (
             ("center", "[x, y, z] in m"),
             ("orientation_amplitudes", "[a1, a2, a3] in rad"),
@@ -293,6 +292,5 @@ class TrajectoryParams:
         if not all(_is_finite_number(x) for x in self.joint_targets):
             errors.append(f"'joint_targets' must hold finite angles (rad), got "
                           f"{self.joint_targets!r}")
-        if errors:
-            raise ValueError("Invalid TrajectoryParams: " + "; ".join(errors) + ".")
+        return errors
 

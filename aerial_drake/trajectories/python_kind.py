@@ -14,7 +14,7 @@
 
 The reference is evaluated once at load (shapes and finiteness, with errors naming the
 field); the scenario's checks then test its derivatives numerically over the whole run
-(:mod:`aerial_drake.simulation.continuity`) before anything is simulated.
+(:mod:`aerial_drake.trajectories.continuity`) before anything is simulated.
 """
 
 from __future__ import annotations
@@ -47,10 +47,8 @@ _SHAPES = {"com": (5, 3), "p_ed": (3,), "v_ed": (3,), "a_ed": (3,), "R_ed": (3, 
 def resolve_python_reference(params: PythonParams) -> Any:
     """The object ``params.function`` names (``module:name``), after putting ``params.path``
     first on the import path; a function of no arguments is called. ValueError naming the
-    field otherwise."""
-    errors = params.errors()
-    if errors:
-        raise ValueError("Invalid python: " + "; ".join(errors) + ".")
+    field if it cannot be found. ``params`` already checked
+    (:func:`aerial_drake.trajectories.kinds.reference_of` does)."""
     module_name, name = (part.strip() for part in params.function.split(":"))
     if params.path:
         folder = str(Path(params.path).expanduser().resolve())

@@ -83,15 +83,13 @@ def _rest_to_rest(values: np.ndarray, velocities: np.ndarray | None = None) -> n
 class WaypointsReference(ReferenceSource):
     """The reference through :class:`~aerial_drake.trajectories.params.WaypointsParams`
     (module docstring). ``joint_targets``: the task's joint angles where the waypoints give
-    none; ``com_offset``: r_o of (33) for ``com: offset``."""
+    none; ``com_offset``: r_o of (33) for ``com: offset``. ``params`` already checked
+    (:func:`aerial_drake.trajectories.kinds.reference_of` does)."""
 
     kind = "waypoints"
 
     def __init__(self, params: WaypointsParams, joint_targets: np.ndarray,
                  com_offset: np.ndarray) -> None:
-        errors = params.errors(len(joint_targets))
-        if errors:
-            raise ValueError("Invalid waypoints: " + "; ".join(errors) + ".")
         points = params.points
         super().__init__(len(joint_targets))
         self.times = np.array([w.time for w in points], dtype=float)

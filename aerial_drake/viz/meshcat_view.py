@@ -4,7 +4,7 @@
 ``configure(builder, loop)`` hook: it adds Drake's ``MeshcatVisualizer`` for the simulated
 plant's illustration geometry (the rotors, in the ``rotors`` variant, are bodies and spin),
 a :class:`TrackingOverlay`, a camera that keeps the robot in view over the whole run
-(:func:`camera_for`), and starts recording.
+(:func:`aerial_drake.viz.camera.camera_for`), and starts recording.
 :meth:`MeshcatView.finish` stops the recording, publishes it (a live browser gets the playback
 controls) and writes ``replay.html`` (``Meshcat.StaticHtml()``: three.js and the whole
 animation in one file; opens offline from ``file://``).
@@ -12,7 +12,7 @@ animation in one file; opens offline from ``file://``).
 What :class:`TrackingOverlay` draws, under ``/drake/overlays`` (``OVERLAY_PATHS``):
 
 - the desired end-effector path x_ed(t) (magenta line) and the desired CoM path x_d(t) (cyan
-  line), sampled once from :func:`aerial_drake.trajectories.kinds.sample_reference` over the run;
+  line), sampled once over the run from the run's reference (``loop.reference.source``);
 - the desired end-effector frame (p_ed, R_ed) as a long, thin, translucent triad and the actual
   one (the plant's frame E) as a short, thick, opaque triad (x red, y green, z blue);
 - the desired CoM x_d (translucent cyan sphere) and the actual CoM (small navy sphere); the CoM
@@ -61,11 +61,11 @@ from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.systems.framework import Context, DiagramBuilder, EventStatus, LeafSystem
 
 from aerial_drake.control.law import desired_attitude, desired_force
-from aerial_drake.robots.extent import vehicle_extent
 from aerial_drake.robots.models import AerialManipulator
 from aerial_drake.simulation.diagram import ClosedLoop
 from aerial_drake.simulation.scenarios import Scenario
-from aerial_drake.trajectories.kinds import sample_reference
+from aerial_drake.trajectories.base import ReferenceSource
+from aerial_drake.trajectories.kinds import reference_of
 from aerial_drake.trajectories.reference import (
     COM_REFERENCE_SIZE,
     HEADING_REFERENCE_SIZE,
@@ -74,6 +74,7 @@ from aerial_drake.trajectories.reference import (
     unpack_heading_reference,
     unpack_task_reference,
 )
+from aerial_drake.viz.camera import camera_for
 
 #: Seconds between frames (live and recorded), for the robot and the overlays.
 PUBLISH_PERIOD = 0.02
@@ -160,70 +161,6 @@ def _z_towards(direction: np.ndarray) -> RotationMatrix:
     return RotationMatrix(np.column_stack([x, np.cross(z, x), z]))
 
 
-#: Camera direction from the target: azimuth -30 deg (in front, +x, and to the right, -y, so
-#: World y, the helicopter's push, points to the right of the picture), elevation 20 deg.
-CAMERA_AZIMUTH, CAMERA_ELEVATION = np.radians(-30.0), np.radians(20.0)
-#: three.js' default vertical field of view (deg), and the narrowest window we frame for
-#: (width / height; 4:3, wider windows show more).
-CAMERA_FOV, CAMERA_ASPECT = 75.0, 4.0 / 3.0
-#: Share of the half-width / half-height the robot may fill.
-CAMERA_FILL = 0.9
-
-
-def robot_envelope(scenario: Scenario) -> np.ndarray:
-    """Points (N, 3) the robot reaches over the run if it tracks: the desired end-effector
-    path, and about each desired CoM the vehicle's lowest point (the helicopter's skids) and a
-    ring at its highest (its rotor discs' outer rims) as wide as the vehicle, both from the
-    model (:func:`aerial_drake.robots.extent.vehicle_extent` of the scenario's plant variant:
-    the vehicle level at the nominal posture; the ring holds any heading)."""
-    extent = vehicle_extent(scenario.plant_variant, scenario.robot_description())
-    times = np.linspace(0.0, scenario.duration, int(scenario.duration * PATH_RATE / 5) + 2)
-    ref = sample_reference(scenario.trajectory, times, scenario.controller_model()
-                           .task_joint_nominal())
-    G = ref.com[:, 0]
-    angles = np.linspace(0.0, 2 * np.pi, 12, endpoint=False)
-    rim = np.column_stack([extent.radius * np.cos(angles), extent.radius * np.sin(angles),
-                           np.full(12, extent.top)])
-    return np.vstack([ref.p_ed, G - [0.0, 0.0, extent.bottom],
-                      (G[:, None, :] + rim).reshape(-1, 3)])
-
-
-def view_coordinates(camera: np.ndarray, target: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """``points`` on the picture of a camera at ``camera`` looking at ``target`` (z up), as
-    (x right, y up) divided by tan(fov / 2): |y| <= 1 and |x| <= aspect are in view."""
-    forward = (target - camera) / np.linalg.norm(target - camera)
-    right = np.cross(forward, [0.0, 0.0, 1.0])
-    right /= np.linalg.norm(right)
-    up = np.cross(right, forward)
-    rays = np.asarray(points) - camera
-    depth = rays @ forward
-    scale = np.tan(np.radians(CAMERA_FOV / 2)) * depth
-    return np.column_stack([rays @ right / scale, rays @ up / scale])
-
-
-def camera_for(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
-    """(camera position, target) in World that keep :func:`robot_envelope` in view over the
-    whole run: the target is the middle of the envelope's bounding box, the camera along
-    (``CAMERA_AZIMUTH``, ``CAMERA_ELEVATION``) from it, as close as ``CAMERA_FILL`` of a
-    ``CAMERA_ASPECT`` window allows."""
-    points = robot_envelope(scenario)
-    target = 0.5 * (points.min(axis=0) + points.max(axis=0))
-    direction = np.array([np.cos(CAMERA_ELEVATION) * np.cos(CAMERA_AZIMUTH),
-                          np.cos(CAMERA_ELEVATION) * np.sin(CAMERA_AZIMUTH),
-                          np.sin(CAMERA_ELEVATION)])
-
-    def fill(distance: float) -> float:
-        xy = view_coordinates(target + distance * direction, target, points)
-        return max(np.abs(xy[:, 0]).max() / CAMERA_ASPECT, np.abs(xy[:, 1]).max())
-
-    near = np.linalg.norm(points - target, axis=1).max() + 0.1  # all points in front
-    far = 100.0 * near
-    for _ in range(50):  # bisection: fill decreases with the distance
-        middle = 0.5 * (near + far)
-        near, far = (middle, far) if fill(middle) > CAMERA_FILL else (near, middle)
-    return target + far * direction, target
-
-
 class TrackingOverlay(LeafSystem):
     """Draws the references, the actual task frames and the disturbances in Meshcat.
 
@@ -238,10 +175,12 @@ class TrackingOverlay(LeafSystem):
     recording time; an initialization publish (re)draws the static objects. The actual
     end-effector pose and CoM come from the robot's rigid model (the controller's) in
     this system's own context, fed with the simulated state mapped by ``rigid_state_indices``.
+    ``reference``: the run's, whose paths are drawn (None: built from ``scenario.trajectory``).
     """
 
     def __init__(self, meshcat: Meshcat, scenario: Scenario, simulated_plant: AerialManipulator,
-                 *, publish_period: float = PUBLISH_PERIOD, prefix: str = OVERLAY_PREFIX):
+                 *, publish_period: float = PUBLISH_PERIOD, prefix: str = OVERLAY_PREFIX,
+                 reference: ReferenceSource | None = None):
         super().__init__()
         self._meshcat = meshcat
         self._prefix = prefix
@@ -255,7 +194,9 @@ class TrackingOverlay(LeafSystem):
         self._D_x = np.asarray(scenario.gains.D_x, dtype=float)
         times = np.linspace(0.0, scenario.duration,
                             int(round(scenario.duration * PATH_RATE)) + 1)
-        ref = sample_reference(scenario.trajectory, times, self._model.task_joint_nominal())
+        reference = reference or reference_of(scenario.trajectory,
+                                              self._model.task_joint_nominal())
+        ref = reference.sample(times)
         self._ee_path, self._com_path = ref.p_ed.T.copy(), ref.com[:, 0].T.copy()
         # arrow path -> visible, to send a visibility only when it changes
         self._shown: dict[str, bool] = {}
@@ -399,8 +340,10 @@ class MeshcatView:
         params.initial_alpha_slider_value = ROBOT_ALPHA
         self.visualizer = MeshcatVisualizer.AddToBuilder(
             builder, loop.output_port("query_object"), self.meshcat, params)
+        reference = loop.reference.source  # the run's own: no second build
         overlay = builder.AddSystem(TrackingOverlay(
-            self.meshcat, self.scenario, loop.simulated_plant, publish_period=self.publish_period))
+            self.meshcat, self.scenario, loop.simulated_plant, publish_period=self.publish_period,
+            reference=reference))
         overlay.set_name("meshcat_overlay")
         for port in ("plant_state", "com_reference", "task_reference", "heading_reference"):
             builder.Connect(loop.output_port(port), overlay.GetInputPort(port))
@@ -411,7 +354,7 @@ class MeshcatView:
             system, index = sources[(wrench_input.get_system(), wrench_input.get_index())]
             builder.Connect(system.get_output_port(index), overlay.GetInputPort(port))
         self.overlay = overlay
-        self.meshcat.SetCameraPose(*camera_for(self.scenario))
+        self.meshcat.SetCameraPose(*camera_for(self.scenario, reference))
         self.meshcat.StartRecording(1.0 / self.publish_period,
                                     set_visualizations_while_recording=self.live)
 

@@ -1,6 +1,6 @@
 """Feasibility of the whole reference before simulating (aerial_drake.simulation.feasibility,
-.continuity): each infeasible reference is refused naming the time and the cause, and the
-time named is where the cause holds; the shipped scenarios pass."""
+aerial_drake.trajectories.continuity): each infeasible reference is refused naming the time
+and the cause, and the time named is where the cause holds; the shipped scenarios pass."""
 
 import dataclasses
 import re
@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 import aerial_drake.simulation.feasibility as dut
+from aerial_drake.control.reference_pose import realising_targets
 from aerial_drake.dynamics.equilibrium import kinematic_J3, solve_configuration
-from aerial_drake.simulation.continuity import find_discontinuity
-from aerial_drake.simulation.reference_pose import realising_targets
 from aerial_drake.simulation.runner import run_scenario
 from aerial_drake.simulation.scenarios import ScenarioError, load_scenario, shipped_scenarios
-from aerial_drake.trajectories.kinds import sample_reference
+from aerial_drake.trajectories.continuity import find_discontinuity
+from aerial_drake.trajectories.kinds import reference_of, sample_reference
 
 
 def named_time(message: str) -> float:
@@ -45,7 +45,8 @@ def test_kinematic_J3_is_the_decoupled_dynamics_J3(paper_model):
     ctx = model.plant.CreateDefaultContext()
     nv = model.plant.num_velocities()
     for t in (0.0, 2.3, 7.1):
-        ref = dut._sample(scenario, model, np.array([t]))
+        ref = reference_of(scenario.trajectory, model.task_joint_nominal()).sample(
+            np.array([t]))
         q = solve_configuration(model, **realising_targets(model, dut._at(ref, 0)),
                                 respect_joint_limits=False)
         model.plant.SetPositions(ctx, q)
@@ -127,14 +128,16 @@ def test_a_reference_through_a_singular_posture_is_refused(paper_model):
 
 
 class Patched:
-    """A reference kind built in the test: the paper's, plus ``extra(times, ref)``."""
+    """A reference built in the test: ``scenario``'s, plus ``extra(times, ref)``; what the
+    checks read of a run's reference (its ``sample``)."""
 
-    def __init__(self, extra):
+    def __init__(self, scenario, model, extra):
+        self.source = reference_of(scenario.trajectory, model.task_joint_nominal())
         self.extra = extra
 
-    def __call__(self, params, times, joint_defaults=None):
-        ref = sample_reference(params, times, joint_defaults)
-        return self.extra(np.asarray(times, dtype=float), ref)
+    def sample(self, times):
+        times = np.asarray(times, dtype=float)
+        return self.extra(times, self.source.sample(times))
 
 
 def with_com(ref, add):
@@ -169,13 +172,13 @@ def wrong_angular_acceleration(times, ref):
     (kink_in_jerk, "x_d'''", 2.5, "jumps"),
     (wrong_angular_acceleration, "dw_ed", None, "is not the rate"),
 ])
-def test_a_discontinuity_is_refused_naming_the_signal_and_time(monkeypatch, paper_model,
-                                                              extra, signal, time, kind):
-    monkeypatch.setattr(dut, "sample_reference", Patched(extra))
+def test_a_discontinuity_is_refused_naming_the_signal_and_time(paper_model, extra, signal,
+                                                              time, kind):
     scenario = load_scenario("nominal", overrides={"duration": 4.0})
     with pytest.raises(ScenarioError, match=r"the reference is not smooth enough for the "
                        rf"law: {re.escape(signal)} (at t = |)") as err:
-        dut.check_reference(scenario, paper_model)
+        dut.check_reference(scenario, paper_model,
+                            reference=Patched(scenario, paper_model, extra))
     message = str(err.value)
     assert kind in message
     if time is not None:
@@ -200,13 +203,10 @@ def test_a_fast_but_smooth_feature_is_not_a_discontinuity(paper_model):
             add[:, n, 0] = a * (-1) ** n * he * e / w ** n
         return with_com(ref, add)
 
-    sample = Patched(bump)
     times = dut.sample_times(2.0, dut.SAMPLE_PERIOD)
-    found = find_discontinuity(lambda t: sample(scenario.trajectory, t,
-                                                paper_model.task_joint_nominal()), times)
+    found = find_discontinuity(Patched(scenario, paper_model, bump).sample, times)
     assert found is None
     # The same bump made a step (its snap cut at t0) is found.
-    cut = Patched(lambda t, ref: step_in_snap(t, bump(t, ref)))
-    found = find_discontinuity(lambda t: cut(scenario.trajectory, t,
-                                             paper_model.task_joint_nominal()), times)
+    cut = Patched(scenario, paper_model, lambda t, ref: step_in_snap(t, bump(t, ref)))
+    found = find_discontinuity(cut.sample, times)
     assert found is not None and found.signal == "x_d''''"

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 
+from aerial_drake.control.registry import zero_controller
 from aerial_drake.simulation import runner as dut
-from aerial_drake.simulation.controllers import zero_controller
 from aerial_drake.simulation.diagram import build_simulation
 from aerial_drake.simulation.scenarios import load_scenario
 from aerial_drake.trajectories.generator import ReferenceGenerator

@@ -79,7 +79,7 @@ def test_bad_values(override, match):
 
 
 def test_bad_disturbance(tmp_path):
-    text = shipped_scenarios()["nominal"].read_text().replace("target: helicopter",
+    text = shipped_scenarios()["nominal"].read_text().replace("target: vehicle",
                                                                "target: tail")
     with pytest.raises(ScenarioError, match=r"disturbances\[0\]\.target: 'tail'"):
         load_scenario(write(tmp_path, text))
@@ -221,11 +221,11 @@ def orientation_error_run(monkeypatch, k_o):
     base on its reference),
     continuous feedback, K_y's orientation block ``k_o``: the orientation rows of y~ and z~.
     The check refusing unequal gains is bypassed (that is what is measured)."""
-    import aerial_drake.simulation.scenarios.checks as checks
+    import aerial_drake.control.gains as gains
     from aerial_drake.control.law import diagnostics_slices
     from aerial_drake.simulation.runner import run_scenario
 
-    monkeypatch.setattr(checks, "_check_orientation_gains", lambda K_y, rows: None)
+    monkeypatch.setattr(gains, "_check_orientation_gains", lambda K_y, rows, where: None)
     s = load_scenario("nominal", overrides={"duration": 1.0, "disturbances": [],
                                             "controller_period": 0.0})
     s.gains.K_y = [30.0] * 3 + list(k_o) + [7.0]

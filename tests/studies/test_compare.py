@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 from aerial_drake import cli
+from aerial_drake.cli import errors as reporting
 from aerial_drake.simulation import interrupts, outputs, runner
 from aerial_drake.simulation.scenarios import Disturbance, ScenarioError, shipped_scenarios
 from aerial_drake.studies import compare as dut
-from aerial_drake.studies import reporting
 from aerial_drake.viz.compare import COMPARE_FIGURE_NAMES
 
 
@@ -235,7 +235,7 @@ def test_displacement_windows_come_from_the_scenario(short_compare):
     run = short_compare.runs["uncoupled"]
     pushed = dataclasses.replace(run, scenario=dataclasses.replace(run.scenario, disturbances=[
         Disturbance(target="end_effector", start=0.15, stop=0.2),
-        Disturbance(target="helicopter", start=0.05, stop=0.1)]))
+        Disturbance(target="vehicle", start=0.05, stop=0.1)]))
     rows = dut.disturbance_displacement(pushed, run)
     assert [r["window_s"] for r in rows] == [[0.05, 0.1], [0.1, 0.15], [0.15, 0.2],
                                              [0.2, 1.2]]

@@ -75,8 +75,8 @@ def test_disturbance_response_peaks_and_windows():
     t = np.arange(0.0, 12.0, 1e-3)
     ee = np.where((t > 4.5) & (t < 4.6), 0.002, 0.0) + np.where(t > 9.5, 0.1, 0.0)
     com = np.where((t > 5.5) & (t < 5.6), 0.25, 0.01) + np.where(t > 6.5, 1.0, 0.0)
-    windows = [("helicopter", 4.0, 5.0), ("end_effector", 9.0, 10.0),
-               ("helicopter", 5.8, 6.0), ("helicopter", 20.0, 21.0)]
+    windows = [("vehicle", 4.0, 5.0), ("end_effector", 9.0, 10.0),
+               ("vehicle", 5.8, 6.0), ("vehicle", 20.0, 21.0)]
     out = disturbance_response(t, _synthetic_diagnostics(t, ee, com), windows)
     first = out[0]
     assert first["window_s"] == [4.0, 5.0]
@@ -256,9 +256,9 @@ def test_figure_windows_come_from_the_scenario(short_paper):
     _, folder, _ = short_paper
     run = plots.load_run(folder / "nominal")
     moved = dataclasses.replace(run.scenario, disturbances=[
-        Disturbance(target="helicopter", start=0.05, stop=0.1),
+        Disturbance(target="vehicle", start=0.05, stop=0.1),
         Disturbance(target="end_effector", start=0.15, stop=0.2),
-        Disturbance(target="helicopter", start=5.0, stop=6.0)])  # after the log's end
+        Disturbance(target="vehicle", start=5.0, stop=6.0)])  # after the log's end
     fig = plots.figure_com(dataclasses.replace(run, scenario=moved))
     for ax in fig.axes:
         spans = sorted((round(p.get_x(), 9), round(p.get_x() + p.get_width(), 9))
@@ -311,7 +311,7 @@ def test_nominal_end_effector_barely_feels_the_force_on_the_helicopter(full_pape
     """The paper's claim (Figs. 3, 4): in the 4-5 s window the end-effector position error
     grows far less than the CoM error."""
     response = full_paper.runs["nominal"].metrics["disturbance_response"]
-    helicopter = next(r for r in response if r["target"] == "helicopter")
+    helicopter = next(r for r in response if r["target"] == "vehicle")
     assert helicopter["window_s"] == [4.0, 5.0]
     assert helicopter["ee_to_com_peak_ratio"] < 0.02  # measured 0.00681 (2.9x)
     assert helicopter["com_error_peak_m"] > 0.12  # the force does move the CoM: 0.244 m

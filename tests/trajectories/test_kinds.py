@@ -3,8 +3,10 @@ every waypoint, and bad sections are refused at load naming the field (issue 18)
 
 import dataclasses
 import math
+import re
 import sys
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,7 +14,12 @@ from pydrake.trajectories import PiecewisePolynomial
 
 from aerial_drake.simulation.scenarios import ScenarioError, load_scenario, shipped_scenarios
 from aerial_drake.trajectories import paper
-from aerial_drake.trajectories.kinds import reference_of
+from aerial_drake.trajectories.kinds import (
+    KINDS,
+    REFERENCE_KINDS,
+    reference_of,
+    validate_trajectory,
+)
 from aerial_drake.trajectories.params import HoverParams, PythonParams, TrajectoryParams
 
 H = 1e-5  # central-difference step (s)
@@ -289,3 +296,74 @@ def test_python_function_that_raises_during_the_run_is_refused_at_load(user_modu
     message = str(err.value)
     assert "ZeroDivisionError: no path after 2 s" in message and "failed while sampled" in message
     assert err.value.field == "trajectory.python.function"
+
+
+# ---- the registry of kinds ---------------------------------------------------------------------
+
+
+def test_every_kind_is_one_registry_entry_and_the_docs_list_each():
+    """The registry names the kinds validation accepts, the section each reads, and the docs'
+    table lists exactly those."""
+    assert KINDS == tuple(REFERENCE_KINDS) == ("paper", "hover", "waypoints", "python")
+    for name, kind in REFERENCE_KINDS.items():
+        assert kind.section is None or dataclasses.is_dataclass(
+            getattr(TrajectoryParams(), kind.section)), name
+    docs = (Path(__file__).parents[2] / "docs" / "trajectories.md").read_text()
+    listed = re.findall(r"^\| `(\w+)`", docs, flags=re.MULTILINE)
+    assert tuple(listed) == KINDS
+
+
+def test_an_unknown_kind_is_refused_listing_the_registry():
+    with pytest.raises(ValueError, match="'kind' must be one of.*'paper', 'hover', 'waypoints', "
+                                         "'python'.*got 'spline'"):
+        reference_of(TrajectoryParams(kind="spline"), None)
+
+
+def test_a_kind_reads_only_its_own_section():
+    """A bad section of another kind does not stop the paper kind (each reads its own)."""
+    params = TrajectoryParams(hover=HoverParams(heading=math.nan))
+    validate_trajectory(params)
+    with pytest.raises(ValueError, match="'hover.heading'"):
+        validate_trajectory(dataclasses.replace(params, kind="hover"))
+
+
+def test_reference_of_builds_by_the_registry_and_validates_once(monkeypatch):
+    """One build: the section checked once (the constructors do not check again), the
+    registry's constructor called once with the joint targets."""
+    calls = {"errors": 0, "section": 0, "build": []}
+    hover = REFERENCE_KINDS["hover"]
+    shared_errors, section_errors = TrajectoryParams.errors, HoverParams.errors
+
+    def count_shared(self):
+        calls["errors"] += 1
+        return shared_errors(self)
+
+    def count_section(self, n_joints=None, prefix="hover."):
+        calls["section"] += 1
+        return section_errors(self, n_joints, prefix)
+
+    def build(params, targets):
+        calls["build"].append(targets.copy())
+        return hover.build(params, targets)
+
+    monkeypatch.setattr(TrajectoryParams, "errors", count_shared)
+    monkeypatch.setattr(HoverParams, "errors", count_section)
+    monkeypatch.setitem(REFERENCE_KINDS, "hover", dataclasses.replace(hover, build=build))
+    source = reference_of(TrajectoryParams(kind="hover"), np.array([0.25, -0.5]))
+    assert calls["errors"] == 1 and calls["section"] == 1
+    assert len(calls["build"]) == 1
+    np.testing.assert_array_equal(calls["build"][0], [0.25, -0.5])
+    np.testing.assert_array_equal(source.evaluate(3.0).q_jd, [0.25, -0.5])
+
+
+def test_waypoint_joints_are_checked_against_the_task_once():
+    """The task's joint count reaches the one validation: a waypoint's joints of the wrong
+    length are named there, not by the constructor afterwards."""
+    params = pick_and_place()
+    points = [dataclasses.replace(w, joints=[0.0, 0.0]) for w in params.waypoints.points]
+    params = dataclasses.replace(params, joint_targets=[], waypoints=dataclasses.replace(
+        params.waypoints, points=points))
+    with pytest.raises(ValueError, match=r"Invalid TrajectoryParams: 'waypoints.points\[0\]."
+                                         r"joints' must be a list of 1 floats"):
+        reference_of(params, [0.0])
+    reference_of(params, [0.1, 0.2])

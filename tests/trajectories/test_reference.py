@@ -9,6 +9,7 @@ from pydrake.common.yaml import yaml_load_typed
 from pydrake.math import RotationMatrix
 
 from aerial_drake.trajectories import generator, paper, reference
+from aerial_drake.trajectories.kinds import reference_of, validate_trajectory
 
 # Many times in [0, 15] s, including 0 and the end of the paper's run.
 TIMES = np.concatenate([[0.0, 1e-3, 15.0], np.linspace(0.0, 15.0, 37)[1:-1] + 0.0137])
@@ -338,6 +339,21 @@ def test_reference_generator_keeps_its_own_params():
     assert system.params() == generic_params()
 
 
+def test_reference_generator_outputs_the_source_it_is_given():
+    """Built from a ReferenceSource (the run's), the generator outputs that very object's
+    values and holds it as ``source``: nothing is rebuilt."""
+    source = reference_of(generic_params(), [0.1])
+    system = generator.ReferenceGenerator(source)
+    assert system.source is source and system.params() is None
+    context = system.CreateDefaultContext()
+    for t in [0.0, 2.5, 9.1]:
+        context.SetTime(t)
+        outputs = [system.GetOutputPort(name).Eval(context) for name in (
+            "com_reference", "task_reference", "heading_reference")]
+        for port, vector in zip(outputs, source.evaluate(t).to_vectors()):
+            np.testing.assert_array_equal(port, vector)
+
+
 def test_reference_generator_validates():
     with pytest.raises(ValueError, match="'com_offset'"):
         generator.ReferenceGenerator(paper.TrajectoryParams(com_offset=[0.0, 0.0]))
@@ -361,7 +377,7 @@ orientation_amplitudes: [0.1, 0.2, 0.3]
 heading_rate: -0.25
 """,
     )
-    params.validate()
+    validate_trajectory(params)
     assert params.center == [0.5, 0.1, 1.0]
     assert params.agile_frequency == 2.0
     assert params.orientation_amplitudes == [0.1, 0.2, 0.3]
@@ -377,8 +393,8 @@ def test_yaml_typo_is_an_error():
 
 
 def test_paper_defaults_are_valid():
-    paper.TrajectoryParams().validate()
-    generic_params().validate()
+    validate_trajectory(paper.TrajectoryParams())
+    validate_trajectory(generic_params())
 
 
 @pytest.mark.parametrize(
@@ -398,11 +414,11 @@ def test_paper_defaults_are_valid():
 def test_validate_names_the_field(changes, field):
     params = paper.TrajectoryParams(**changes)
     with pytest.raises(ValueError, match=f"'{field}'"):
-        params.validate()
+        validate_trajectory(params)
     with pytest.raises(ValueError, match=f"'{field}'"):
         paper.evaluate_reference(params, 0.0)
 
 
 def test_validate_reports_length_and_fix():
     with pytest.raises(ValueError, match=r"'center' must be a list of 3 floats .*exactly three"):
-        paper.TrajectoryParams(center=[0.6, 0.0]).validate()
+        validate_trajectory(paper.TrajectoryParams(center=[0.6, 0.0]))

@@ -454,6 +454,39 @@ def _rotation_angle(R):
     return math.acos(min(max(c, -1.0), 1.0))
 
 
+#: The packed gains, in the order the law reads them: (name, size), size -1 for the task's n
+#: rows; the names are :class:`~aerial_drake.control.law.GainMatrices`' fields and gravity.
+#: The one place the order is written: ``pack_gains`` packs by it, :func:`_gain` reads by it
+#: and :func:`_packed_gains_size` counts it (here, so the law recompiles when it changes).
+GAIN_LAYOUT = (("K_x", 3), ("D_x", 3), ("k_R", 1), ("k_w", 1), ("Lambda2_bar", 3),
+               ("Lambda2_bar_inv", 3), ("K_y", -1), ("K_z", -1), ("gamma1", 1), ("gamma2", 1),
+               ("gravity", 1))
+_GAIN_SIZES = tuple(size for _, size in GAIN_LAYOUT)
+_GAIN_AT = {name: i for i, (name, _) in enumerate(GAIN_LAYOUT)}
+_K_X, _D_X, _K_R, _K_W = _GAIN_AT["K_x"], _GAIN_AT["D_x"], _GAIN_AT["k_R"], _GAIN_AT["k_w"]
+_L2, _L2_INV, _K_Y, _K_Z = (_GAIN_AT["Lambda2_bar"], _GAIN_AT["Lambda2_bar_inv"],
+                            _GAIN_AT["K_y"], _GAIN_AT["K_z"])
+_GAMMA1, _GAMMA2, _GRAVITY = _GAIN_AT["gamma1"], _GAIN_AT["gamma2"], _GAIN_AT["gravity"]
+
+
+@_jit
+def _packed_gains_size(n):
+    """The packed gains' length for a task of ``n`` rows."""
+    size = 0
+    for s in _GAIN_SIZES:
+        size += n if s < 0 else s
+    return size
+
+
+@_inline
+def _gain(gains, i, n):
+    """Entry ``i`` of :data:`GAIN_LAYOUT` in the packed ``gains`` (a task of ``n`` rows)."""
+    start = 0
+    for k in range(i):
+        start += n if _GAIN_SIZES[k] < 0 else _GAIN_SIZES[k]
+    return gains[start:start + (n if _GAIN_SIZES[i] < 0 else _GAIN_SIZES[i])]
+
+
 #: The law's parameters (after the tree in the packed arrays, see CompiledLaw).
 _LawParams = namedtuple("_LawParams",
                         "nq ee_body nj rows joint_q joint_v R_BE p_BE gains limits")
@@ -466,7 +499,7 @@ def _unpack_law(model, index):
     n = tree.reflected.shape[0] - 6
     R_BE, at = _mat(model, at, 3, 3)
     p_BE, at = _vec(model, at, 3)
-    gains, at = _vec(model, at, 17 + 2 * n)
+    gains, at = _vec(model, at, _packed_gains_size(n))
     limits, at = _vec(model, at, 2)
     nj = index[k + 2]
     if at != model.shape[0] or k + 3 + n + 2 * nj != index.shape[0]:
@@ -572,10 +605,12 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
     xi = w.xi
     _mv_into(T, v, xi)
     gains = p.gains
-    K_x, D_x, k_R, k_w = gains[0:3], gains[3:6], gains[6], gains[7]
-    L2, L2_inv = gains[8:11], gains[11:14]
-    K_y, K_z = gains[14:14 + n], gains[14 + n:14 + 2 * n]
-    gamma1, gamma2, gravity = gains[14 + 2 * n], gains[15 + 2 * n], gains[16 + 2 * n]
+    K_x, D_x = _gain(gains, _K_X, n), _gain(gains, _D_X, n)
+    k_R, k_w = _gain(gains, _K_R, n)[0], _gain(gains, _K_W, n)[0]
+    L2, L2_inv = _gain(gains, _L2, n), _gain(gains, _L2_INV, n)
+    K_y, K_z = _gain(gains, _K_Y, n), _gain(gains, _K_Z, n)
+    gamma1, gamma2 = _gain(gains, _GAMMA1, n)[0], _gain(gains, _GAMMA2, n)[0]
+    gravity = _gain(gains, _GRAVITY, n)[0]
     w_b, rho = xi[3:6], xi[6:]
     x_d, xd1, xd2, xd3, xd4 = com[0:3], com[3:6], com[6:9], com[9:12], com[12:15]
     Re3, Re3_dot = w.Re3[0], w.Re3[1]

@@ -10,7 +10,13 @@ import sys
 import numpy as np
 from numba import types
 
-from aerial_drake.control.compiled.kernels import _decompose, _law, _workspace_size
+from aerial_drake.control.compiled.kernels import (
+    GAIN_LAYOUT,
+    _decompose,
+    _law,
+    _packed_gains_size,
+    _workspace_size,
+)
 from aerial_drake.control.compiled.kinematics import _pack_tree
 from aerial_drake.control.law import diagnostics_size
 from aerial_drake.dynamics.kinematic_tree import KinematicTree
@@ -44,9 +50,14 @@ def decompose(tree: KinematicTree, q: np.ndarray, v: np.ndarray) -> dict[str, np
 
 def pack_gains(K, gravity: float) -> np.ndarray:
     """The gains of a :class:`aerial_drake.control.law.GainMatrices` and gravity in the order
-    ``_law`` reads them."""
-    return np.concatenate([K.K_x, K.D_x, [K.k_R, K.k_w], K.Lambda2_bar, K.Lambda2_bar_inv,
-                           K.K_y, K.K_z, [K.gamma1, K.gamma2, gravity]]).astype(float)
+    ``_law`` reads them (:data:`~aerial_drake.control.compiled.kernels.GAIN_LAYOUT`)."""
+    parts = [np.ravel(np.asarray(gravity if name == "gravity" else getattr(K, name), float))
+             for name, _ in GAIN_LAYOUT]
+    n = len(K.K_y)
+    for (name, size), part in zip(GAIN_LAYOUT, parts):
+        if part.size != (n if size < 0 else size):
+            raise ValueError(f"gain {name} has {part.size} entries for a task of {n} rows")
+    return np.concatenate(parts)
 
 
 def law_cache_is_cold() -> bool:
@@ -104,7 +115,7 @@ class CompiledLaw:
         body, R_BE, p_BE = end_effector
         nb, nv = tree.parent.size, tree.reflected_inertia.size
         gains = np.ravel(gains).astype(float)
-        if gains.size != 17 + 2 * (nv - 6):
+        if gains.size != _packed_gains_size(nv - 6):
             raise ValueError(f"{gains.size} gains for {nv} velocities: see pack_gains")
         floats, ints = _pack_tree(tree)
         # The law's parameters after the tree, in the order _unpack_law reads them.

@@ -1,9 +1,9 @@
 """The scenario's ``trajectory:`` section, checked at load for every kind: its fields
-(:meth:`~aerial_drake.trajectories.params.TrajectoryParams.validate`), the reference built
+(:func:`~aerial_drake.trajectories.kinds.validate_trajectory`), the reference built
 from them (a waypoint list that cannot be interpolated, a user's module that does not import,
-a function whose samples have the wrong shapes), and for the ``python`` kind the
-derivatives it gives against finite differences over the whole run (a user's reference is the
-one kind whose derivatives the package did not construct)."""
+a function whose samples have the wrong shapes), and for a kind whose derivatives are the
+user's (the ``python`` kind: ``user_derivatives`` in the registry of kinds) the derivatives it
+gives against finite differences over the whole run."""
 
 from __future__ import annotations
 
@@ -15,9 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from aerial_drake.simulation.continuity import find_discontinuity
 from aerial_drake.simulation.scenarios.checks import ScenarioError
-from aerial_drake.trajectories.kinds import reference_of
+from aerial_drake.trajectories.continuity import find_discontinuity
+from aerial_drake.trajectories.kinds import REFERENCE_KINDS, reference_of
 
 __all__ = ["check_trajectory", "resolve_python_path", "PYTHON_CHECK_PERIOD"]
 
@@ -36,7 +36,7 @@ def check_trajectory(scenario: Any, joint_nominal: np.ndarray) -> None:
         found = _QUOTED.search(message)
         field = "trajectory" + (f".{found.group(1)}" if found else "")
         raise ScenarioError(f"trajectory: {message}", field) from None
-    if scenario.trajectory.kind != "python":
+    if not REFERENCE_KINDS[scenario.trajectory.kind].user_derivatives:
         return
     count = max(int(math.ceil(scenario.duration / PYTHON_CHECK_PERIOD)), 3)
     times = np.linspace(0.0, scenario.duration, count + 1)

@@ -1,5 +1,6 @@
-"""The command line's study commands: ``aerial-drake study FILE`` and ``aerial-drake
-study-plot TABLE`` (parsers here, so that ``aerial_drake.cli`` only adds them)."""
+"""``aerial-drake study FILE`` (a study's runs on Dask: :func:`aerial_drake.studies.study.
+run_study`) and ``aerial-drake study-plot TABLE`` (:func:`aerial_drake.viz.study_plots.
+write_study_plots`)."""
 
 from __future__ import annotations
 
@@ -8,10 +9,10 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from aerial_drake.studies.reporting import report_error
+from aerial_drake.cli.errors import report_error
 
 
-def cli_study(args: argparse.Namespace) -> int:
+def cmd_study(args: argparse.Namespace) -> int:
     """``aerial-drake study FILE [--workers N | --scheduler ADDRESS] [--out DIR]
     [--duration S] [--draws N] [--quiet] [--json]``."""
     from aerial_drake.simulation.outputs import OutputError, strict_json
@@ -71,7 +72,7 @@ def _show_run(args: argparse.Namespace, loaded: Any) -> int:
                         f"'{loaded.study.name}' (give a run_id or an index from its table)")
 
 
-def cli_study_plot(args: argparse.Namespace) -> int:
+def cmd_study_plot(args: argparse.Namespace) -> int:
     """``aerial-drake study-plot TABLE [--out DIR] [--formats png svg]``."""
     from aerial_drake.viz.study_plots import write_study_plots
     out = Path(args.out) if args.out else Path(args.table).parent / "plots"
@@ -82,40 +83,3 @@ def cli_study_plot(args: argparse.Namespace) -> int:
     for path in written:
         print(f"wrote {path}")
     return 0
-
-
-def add_study_parsers(sub: Any, common: argparse.ArgumentParser) -> None:
-    """Add ``study`` and ``study-plot`` to the command line's subparsers."""
-    study = sub.add_parser(
-        "study", parents=[common], help="run a study (parameter grid, Monte Carlo draws) on "
-        "Dask; one row per run in OUT/results.csv (docs/studies.md)",
-        description="Run a study file's runs on a local Dask cluster (default: one worker "
-        "process per CPU) or on an existing cluster (--scheduler). Rows are written as runs "
-        "finish; run the same command again to resume an interrupted study.")
-    study.add_argument("file", help="a shipped study's name (robustness, gains, "
-                       "gains_attitude) or a study YAML file")
-    study.add_argument("--workers", type=int, default=None,
-                       help="worker processes of the local cluster (default: one per CPU)")
-    study.add_argument("--scheduler", default=None,
-                       help="address of an existing Dask scheduler (e.g. tcp://host:8786)")
-    study.add_argument("--out", default=None,
-                       help="output folder (default: out/studies/NAME)")
-    study.add_argument("--duration", type=float, default=None,
-                       help="override every run's duration (s)")
-    study.add_argument("--draws", type=int, default=None, help="override the number of draws")
-    study.add_argument("--show-run", default=None, metavar="RUN",
-                       help="print the scenario of one run (its run_id or index in the "
-                            "table) as YAML, to reproduce it with 'aerial-drake run FILE.yaml'; "
-                            "runs nothing")
-    study.add_argument("--quiet", action="store_true", help="no progress bar")
-    study.add_argument("--json", action="store_true", help="also print a JSON summary")
-    study.set_defaults(func=cli_study)
-    plot = sub.add_parser(
-        "study-plot", parents=[common], help="histograms, box plots per phase and maps of a "
-        "study's results table")
-    plot.add_argument("table", help="a study's results.csv")
-    plot.add_argument("--out", default=None, help="where to write (default: TABLE's folder/"
-                      "plots)")
-    plot.add_argument("--formats", nargs="+", default=["png", "svg"], choices=["png", "svg",
-                                                                                "pdf"])
-    plot.set_defaults(func=cli_study_plot)

@@ -1,8 +1,9 @@
 """How the command line reports an error: one line on stderr (no traceback), and with
 ``--json`` a JSON error object on stdout, and which exit status each error gets
-(:func:`exit_status_for`). Here, below the command line, so that the study commands
-(aerial_drake.studies.paper.cli_run, aerial_drake.studies.compare.cli_compare) report the
-same way. The standard library only: the command line imports this before anything else."""
+(:func:`exit_status_for`): 2 bad input (the message names the file, field or option, the
+value and the fix), 1 a run that failed, 3 results not written, 128 + n stopped by signal n
+(docs/reliability.md, "Exit statuses"). Every command reports through here. The standard
+library only: the command line imports this before anything else."""
 
 from __future__ import annotations
 

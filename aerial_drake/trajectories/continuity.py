@@ -16,8 +16,9 @@ samples a period ``h`` apart (:func:`find_discontinuity`):
   the tolerance the difference's own truncation error allows (a sixth of the derivative's
   second difference, times :data:`MISMATCH_RATIO`), re-checked at h / 16 where it fails.
 
-The reference comes through :func:`aerial_drake.trajectories.kinds.sample_reference`, so the
-test serves every reference kind.
+The samples come from any reference kind (e.g. a
+:class:`~aerial_drake.trajectories.base.ReferenceSource`'s ``sample``), so the test serves
+every one.
 """
 
 from __future__ import annotations
