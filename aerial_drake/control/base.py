@@ -126,13 +126,18 @@ def _define(T):
                           ) -> None:
             """Write the law's command and diagnostics into ``command`` and ``diagnostics``
             (views of the held state when sampled): :meth:`calc_command` on a finite state,
-            its extras placed by name. Override it for a faster path (no copies)."""
+            its extras placed by name. Override it for a faster path (no copies), or for a
+            scalar type other than float (the paper controller does both)."""
             if not np.all(np.isfinite(x)):
                 raise FloatingPointError(NONFINITE_STATE)
             result = self.calc_command(t, x, com, task, heading)
             extras: Mapping[str, Any] = {}
             if isinstance(result, tuple):
                 result, extras = result
+            if np.shape(result) != command.shape:
+                raise ValueError(f"{type(self).__name__}.calc_command returned a command of "
+                                 f"shape {np.shape(result)}; it must be [f, mu (3), tau (n)], "
+                                 f"{command.size} entries")
             command[:] = result
             diagnostics[:] = np.nan
             for name, value in extras.items():

@@ -152,6 +152,14 @@ def test_bad_layouts_and_entries_are_refused(model):
     with pytest.raises(KeyError, match="no diagnostics entry 'speed'"):
         Unknown(model).evaluate(x, np.zeros(15), np.zeros(27), np.zeros(9))
 
+    class Short(Clock):
+        def calc_command(self, t, x, com, task, heading):
+            return np.zeros(4)
+
+    with pytest.raises(ValueError, match=r"Short.calc_command returned a command of shape "
+                                         r"\(4,\); it must be \[f, mu \(3\), tau \(n\)\], 11"):
+        Short(model).evaluate(x, np.zeros(15), np.zeros(27), np.zeros(9))
+
     class Nothing(ControllerBase):
         pass
 
