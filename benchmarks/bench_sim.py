@@ -26,7 +26,7 @@ import numpy as np
 
 
 def worker(scenario_name: str, duration: float, zero: bool) -> dict:
-    from aerial_drake.simulation.controllers import zero_controller
+    from aerial_drake.control.registry import zero_controller
     from aerial_drake.simulation.runner import run_scenario
     from aerial_drake.simulation.scenarios import load_scenario
 

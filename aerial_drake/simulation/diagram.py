@@ -39,6 +39,8 @@ from pydrake.systems.primitives import (
 
 from aerial_drake.control.controller import DecoupledController
 from aerial_drake.control.interface import check_controller_ports
+from aerial_drake.control.registry import ControllerFactory, make_controller_system
+from aerial_drake.control.registry import controller_factory as scenario_controller_factory
 from aerial_drake.robots.models import AerialManipulator, add_to_builder
 from aerial_drake.simulation.actuators import (
     ActuatorLag,
@@ -47,8 +49,6 @@ from aerial_drake.simulation.actuators import (
     lag_time_constant,
     make_base_actuator,
 )
-from aerial_drake.simulation.controllers import ControllerFactory, make_controller_system
-from aerial_drake.simulation.controllers import controller_factory as scenario_controller_factory
 from aerial_drake.simulation.disturbances import add_wrench_source, resolve_random_disturbances
 from aerial_drake.simulation.scenarios import Scenario
 from aerial_drake.simulation.sensing import add_state_sensor
@@ -206,7 +206,7 @@ def build_closed_loop(scenario: Scenario, *, name: str = "closed_loop",
     """The closed loop of ``scenario`` as one Diagram with exported disturbance inputs.
 
     ``controller_factory`` (``factory(scenario, model) -> system``,
-    :mod:`aerial_drake.simulation.controllers`; e.g. its ``zero_controller``, the benchmarks'
+    :mod:`aerial_drake.control.registry`; e.g. its ``zero_controller``, the benchmarks'
     baseline) overrides the scenario's ``controller.type``.
     """
     builder = DiagramBuilder()
@@ -243,7 +243,7 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
     # Sampling: the paper's controller runs at 1 kHz and holds its command between samples
     # (its own discrete state); period 0 means continuous feedback.
     # The controller: the scenario's ``controller.type`` (default the paper's), or the
-    # caller's factory (aerial_drake.simulation.controllers).
+    # caller's factory (aerial_drake.control.registry).
     factory = controller_factory or scenario_controller_factory(scenario)
     system = make_controller_system(factory, scenario, model, source)
     assert model.task is not None

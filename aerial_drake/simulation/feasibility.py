@@ -24,6 +24,7 @@ import math
 import numpy as np
 
 from aerial_drake.control.controller import task_jacobian
+from aerial_drake.control.reference_pose import mass_and_gravity, realising_targets
 from aerial_drake.dynamics.decoupling import DecoupledDynamics
 from aerial_drake.dynamics.equilibrium import (
     UnreachablePose,
@@ -33,7 +34,6 @@ from aerial_drake.dynamics.equilibrium import (
 )
 from aerial_drake.robots.models import AerialManipulator, nominal_end_effector_offset
 from aerial_drake.simulation.diagram import input_limits
-from aerial_drake.simulation.reference_pose import mass_and_gravity, realising_targets
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
 from aerial_drake.trajectories.base import ReferenceSource
 from aerial_drake.trajectories.continuity import find_discontinuity

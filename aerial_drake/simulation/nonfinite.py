@@ -13,26 +13,10 @@ from typing import Any
 
 import numpy as np
 
-from aerial_drake.control.interface import required_diagnostics_columns
-from aerial_drake.control.law import task_size_of_diagnostics
-
 #: The logged signals searched for the first non-finite value, in the loop's order (the
-#: references are computed from the time alone and finite by construction).
-CHECKED_SIGNALS = ("plant_state", "command", "applied_command", "diagnostics",
-                    "rotor_drive_torque")
-
-
-def _checked(name: str, values: np.ndarray) -> np.ndarray:
-    """The part of a signal that must be finite: all of it, but for the diagnostics only the
-    entries every controller of the paper law's layout fills (control.interface: a baseline
-    leaves others NaN), and none of a controller's own other layout."""
-    if name == "diagnostics":
-        try:
-            n = task_size_of_diagnostics(values.shape[-1])
-        except ValueError:  # not the paper law's layout: the controller's own quantities
-            return values[..., :0]
-        return values[..., required_diagnostics_columns(n)]
-    return values
+#: references are computed from the time alone and finite by construction; a controller's
+#: diagnostics are its own extras, which may be NaN where it does not define them).
+CHECKED_SIGNALS = ("plant_state", "command", "applied_command", "rotor_drive_torque")
 
 
 def first_non_finite_sample(arrays: dict[str, np.ndarray]) -> tuple[int, str] | None:
@@ -43,7 +27,7 @@ def first_non_finite_sample(arrays: dict[str, np.ndarray]) -> tuple[int, str] | 
     for name in CHECKED_SIGNALS:
         if name not in arrays or arrays[name].size == 0:
             continue
-        bad = ~np.all(np.isfinite(_checked(name, arrays[name])), axis=1)
+        bad = ~np.all(np.isfinite(arrays[name]), axis=1)
         if bad.any() and (first is None or int(np.argmax(bad)) < first[0]):
             first = (int(np.argmax(bad)), name)
     return first
@@ -85,7 +69,7 @@ def first_non_finite_output(loop: Any, root_context: Any) -> str | None:
             value = port.Eval(port.get_system().GetMyContextFromRoot(root_context))
         except Exception:  # the value itself cannot be computed there: that one
             return name
-        if not np.all(np.isfinite(_checked(name, np.asarray(value)))):
+        if not np.all(np.isfinite(np.asarray(value))):
             return name
     return None
 
@@ -96,6 +80,5 @@ SIGNAL_MEANING = {
     "command": "the control law's command became non-finite",
     "applied_command": "the command applied to the plant (after lag and saturation) became "
                        "non-finite",
-    "diagnostics": "the control law's diagnostics became non-finite",
     "rotor_drive_torque": "the rotor drive's torque became non-finite",
 }

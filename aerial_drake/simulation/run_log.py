@@ -91,7 +91,8 @@ def _align_held_diagnostics(arrays: dict[str, np.ndarray], loop: ClosedLoop,
     held = arrays["diagnostics"]
     x = arrays["plant_state"][-1][loop.simulated_plant.rigid_state_indices]
     try:
-        last = loop.controller.evaluate(x, *(arrays[k][-1] for k in REFERENCES))[1]
+        last = loop.controller.evaluate(x, *(arrays[k][-1] for k in REFERENCES),
+                                        t=float(arrays["t"][-1]))[1]
     except FloatingPointError:
         last = np.full(held.shape[1], np.nan)
     except AssumptionViolation:

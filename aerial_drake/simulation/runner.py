@@ -18,7 +18,8 @@ from pydrake.systems.framework import Context
 
 from aerial_drake.control.compiled import compile_law
 from aerial_drake.control.law import AssumptionViolation
-from aerial_drake.simulation.controllers import ControllerFactory
+from aerial_drake.control.reference_pose import reference_configuration
+from aerial_drake.control.registry import ControllerFactory
 from aerial_drake.simulation.diagram import ClosedLoop, build_simulation
 from aerial_drake.simulation.disturbances import resolve_random_disturbances
 from aerial_drake.simulation.feasibility import check_reference, check_start_posture
@@ -36,7 +37,6 @@ from aerial_drake.simulation.outputs import (
     write_result_set,
 )
 from aerial_drake.simulation.perturbations import start_perturbations
-from aerial_drake.simulation.reference_pose import reference_configuration
 from aerial_drake.simulation.run_log import (
     collect_log,
     controller_period,
@@ -240,7 +240,7 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     SIGINT (Ctrl-C), SIGTERM and SIGHUP stop the run the same way, with
     :class:`SimulationInterrupted`; one arriving while the files are written is held until
     they are complete. ``controller_factory`` (``factory(scenario, model) -> system``,
-    :mod:`aerial_drake.simulation.controllers`) overrides the scenario's ``controller.type``.
+    :mod:`aerial_drake.control.registry`) overrides the scenario's ``controller.type``.
     ``before_start()`` is called once everything is built and the initial state set, just
     before the simulation (and its wall clock) starts: e.g. to wait for a browser to open the
     live view. ``extra_files()`` gives more ``{name: text}`` files for the run's folder (e.g.

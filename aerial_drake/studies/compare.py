@@ -10,7 +10,7 @@ paper,uncoupled,static_compensation`` (or :func:`run_compare`) writes::
 The runs are independent simulations: with ``jobs`` > 1 they run in a process pool of that
 many workers ("spawn" processes, each loading the scenario and the numba cache afresh, about
 5 s of start-up each), else one after the other in this process with progress lines. A
-controller registered in this process (:func:`aerial_drake.simulation.controllers.
+controller registered in this process (:func:`aerial_drake.control.registry.
 register_controller`) is unknown to spawned workers: compare it with ``jobs=1``.
 """
 

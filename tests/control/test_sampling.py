@@ -101,8 +101,10 @@ def test_zero_controller_holds_zeros_and_samples_its_inputs(scenario):
     simulator = Simulator(diagram)
     simulator.AdvanceTo(0.01)
     ctrl_context = controller.GetMyContextFromRoot(simulator.get_context())
-    assert not np.any(controller.get_command_output_port().Eval(ctrl_context))
-    assert not np.any(controller.get_diagnostics_output_port().Eval(ctrl_context))
+    command = controller.get_command_output_port().Eval(ctrl_context)
+    assert command.size == 11 and not np.any(command)
+    assert controller.diagnostics_layout == ()  # no diagnostics: a size-0 port
+    assert controller.get_diagnostics_output_port().size() == 0
     # It read its inputs (the reference is generated, as for the real controller) at each
     # sample before t = 0.01 s: 0, 1, ..., 9 ms.
     assert controller.evaluations == 10

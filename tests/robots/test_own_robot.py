@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from aerial_drake.control.controller import make_controller
+from aerial_drake.control.reference_pose import reference_configuration
 from aerial_drake.robots.description import RobotDescriptionError, load_robot_description
 from aerial_drake.robots.models import make_plant
-from aerial_drake.simulation.reference_pose import reference_configuration
 from aerial_drake.simulation.runner import run_scenario
 from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
 from aerial_drake.trajectories.kinds import evaluate_reference

@@ -1,31 +1,31 @@
-"""The controller interface: choosing a controller by the scenario's ``controller`` section,
-validating it, and a user-defined controller (a LeafSystem defined here) through the same
-scenario machinery and metrics."""
+"""The controller interface and registry (aerial_drake.control.registry): choosing a controller
+by the scenario's ``controller`` section, validating it, and a user-defined controller (a plain
+LeafSystem defined here, not on the base) through the same scenario machinery and metrics."""
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
 from pydrake.systems.framework import LeafSystem
 
+from aerial_drake.control import registry as dut
 from aerial_drake.control.baselines import BaselineController
 from aerial_drake.control.controller import DecoupledController
-from aerial_drake.control.interface import check_controller_ports, error_diagnostics
-from aerial_drake.control.law import diagnostics_size, diagnostics_slices
+from aerial_drake.control.interface import check_controller_ports
 from aerial_drake.robots.models import make_plant
-from aerial_drake.simulation import controllers as dut
+from aerial_drake.simulation import controllers as back_compat
 from aerial_drake.simulation.diagram import build_closed_loop
 from aerial_drake.simulation.runner import run_scenario
 from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
-from aerial_drake.trajectories.reference import (
-    unpack_com_reference,
-    unpack_task_reference,
-)
+from aerial_drake.simulation.tracking import entries
+from aerial_drake.trajectories.reference import unpack_task_reference
 
 
 class HoldController(LeafSystem):
     """A user's controller: hover thrust, no body torque, the arm's gravity compensated;
-    continuous (no ``period``), diagnostics by the interface's helper."""
+    continuous (no ``period``), one diagnostics entry (its thrust) and no
+    ``diagnostics_layout``."""
 
     def __init__(self, model):
         super().__init__()
@@ -38,33 +38,14 @@ class HoldController(LeafSystem):
         self.DeclareVectorInputPort("task_reference", 27)
         self.DeclareVectorInputPort("heading_reference", 9)
         self.DeclareVectorOutputPort("command", 4 + self._n, self._command)
-        self.DeclareVectorOutputPort("diagnostics", diagnostics_size(self._n),
-                                     self._diagnostics)
-
-    def _set(self, context):
-        self._plant.SetPositionsAndVelocities(self._ctx, self.get_input_port(0).Eval(context))
+        self.DeclareVectorOutputPort("diagnostics", 1, lambda c, o: o.SetFromVector(
+            self.GetOutputPort("command").Eval(c)[:1]))
 
     def _command(self, context, output):
-        self._set(context)
+        self._plant.SetPositionsAndVelocities(self._ctx, self.get_input_port(0).Eval(context))
         m = self._plant.CalcTotalMass(self._ctx)
         tau_g = self._plant.CalcGravityGeneralizedForces(self._ctx)[6:]
         output.SetFromVector(np.concatenate([[m * 9.81], np.zeros(3), -tau_g]))
-
-    def _diagnostics(self, context, output):
-        self._set(context)
-        plant, ctx = self._plant, self._ctx
-        R_b = plant.EvalBodyPoseInWorld(ctx, self._model.base_body).rotation().matrix()
-        X_WE = self._model.end_effector_frame.CalcPoseInWorld(ctx)
-        t = unpack_task_reference(self.get_input_port(2).Eval(context))
-        task = self._model.task
-        q_j = plant.GetPositions(ctx)[list(task.joint_positions)]
-        output.SetFromVector(error_diagnostics(
-            task=task,
-            x_g=plant.CalcCenterOfMassPositionInWorld(ctx),
-            x_g_dot=plant.CalcCenterOfMassTranslationalVelocityInWorld(ctx),
-            com_reference=unpack_com_reference(self.get_input_port(1).Eval(context)),
-            p_WE=X_WE.translation(), R_WE=X_WE.rotation().matrix(), q_j=q_j, p_ed=t.p_ed,
-            R_ed=t.R_ed, q_jd=t.q_jd, R_b=R_b, R_d=R_b, sigma_min_J3=1.0, f_d_norm=500.0))
 
 
 def hold_factory(scenario, model):
@@ -131,10 +112,29 @@ def test_a_controller_without_the_interfaces_ports_is_refused():
     with pytest.raises(ValueError, match="built-in"):
         dut.register_controller("paper", hold_factory)
 
+    class WrongLayout(HoldController):
+        diagnostics_layout = (("thrust", 1), ("extra", 2))
+
+    with pytest.raises(ValueError, match="'diagnostics' has size 1 but its diagnostics_layout "
+                                         "sums to 3"):
+        check_controller_ports(WrongLayout(model), model.plant.num_multibody_states(), 7, 1)
+
+
+def test_the_simulation_layers_names_are_the_registrys():
+    """aerial_drake.simulation.controllers only re-exports (back-compatibility)."""
+    from aerial_drake.control import reference_pose
+
+    for name in back_compat.__all__:
+        home = reference_pose if name == "body_offset_in_heading_frame" else dut
+        assert getattr(back_compat, name) is getattr(home, name), name
+    dut.register_controller("test_back_compat", hold_factory)
+    assert "test_back_compat" in back_compat.controller_types()
+
 
 def test_a_user_defined_controller_runs_through_the_scenario_machinery(tmp_path):
     """Registered by name, chosen by a scenario file, run by run_scenario: its logs and
-    metrics are the same machinery's, and its error diagnostics are the interface's."""
+    metrics are the same machinery's, its errors measured from the log and its own
+    diagnostics logged apart."""
     dut.register_controller("test_hold", hold_factory)
     path = tmp_path / "hold.yaml"
     path.write_text("name: hold\nduration: 0.3\ncontroller:\n  type: test_hold\n"
@@ -151,16 +151,23 @@ def test_a_user_defined_controller_runs_through_the_scenario_machinery(tmp_path)
     # recomputed here from the logged plant state.
     model = make_plant("rigid")
     ctx = model.plant.CreateDefaultContext()
-    sl = diagnostics_slices(model.n)
     errors = []
     for x, task in zip(result.log["plant_state"][::50], result.log["task_reference"][::50]):
         model.plant.SetPositionsAndVelocities(ctx, x)
         p = model.end_effector_frame.CalcPoseInWorld(ctx).translation()
         errors.append(np.linalg.norm(p - unpack_task_reference(task).p_ed))
-    logged = result.log["diagnostics"][::50, sl["ee_position_error"]][:, 0]
+    layout = json.loads(str(np.load(tmp_path / "out" / "log.npz")["layout"]))
+    tracked = entries(result.log["tracking"], layout["tracking"])
+    logged = tracked["ee_position_error"][::50, 0]
     np.testing.assert_allclose(logged, errors, rtol=1e-9, atol=1e-12)
+    # Its own diagnostics (the thrust), one entry with no layout of its own: named generically;
+    # the paper law's entries it does not define are not faked (no sigma_min_J3 of its own,
+    # the margin comes from the tracking errors).
+    np.testing.assert_array_equal(result.log["diagnostics"][:, 0], result.log["command"][0, 0])
+    assert layout["diagnostics"] == [["d0", 1]]
+    assert m["min_f_d_norm_N"] is None
     assert phase["ee_position_error_m"]["max"] == pytest.approx(
-        result.log["diagnostics"][:, sl["ee_position_error"]].max())
+        tracked["ee_position_error"].max())
     # The same system handed straight to the runner, without registering: the same run.
     again = run_scenario(dataclasses.replace(scenario, controller=dataclasses.replace(
         scenario.controller, type="paper")), controller_factory=hold_factory, progress=False)

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import aerial_drake.simulation.feasibility as dut
+from aerial_drake.control.reference_pose import realising_targets
 from aerial_drake.dynamics.equilibrium import kinematic_J3, solve_configuration
-from aerial_drake.simulation.reference_pose import realising_targets
 from aerial_drake.simulation.runner import run_scenario
 from aerial_drake.simulation.scenarios import ScenarioError, load_scenario, shipped_scenarios
 from aerial_drake.trajectories.continuity import find_discontinuity

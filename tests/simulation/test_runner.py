@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 
+from aerial_drake.control.registry import zero_controller
 from aerial_drake.simulation import runner as dut
-from aerial_drake.simulation.controllers import zero_controller
 from aerial_drake.simulation.diagram import build_simulation
 from aerial_drake.simulation.scenarios import load_scenario
 from aerial_drake.trajectories.generator import ReferenceGenerator
@@ -111,14 +111,14 @@ def test_a_nan_command_stops_the_run_with_time_signal_and_cause(monkeypatch, tmp
     applied on body helicopter contains NaN", with neither)."""
     from aerial_drake.control.controller import _DecoupledControllerBase
 
-    evaluate_into = _DecoupledControllerBase._evaluate_into
+    evaluate_into = _DecoupledControllerBase.evaluate_into
 
-    def poisoned(self, x, com, task, heading, command, diagnostics):
-        evaluate_into(self, x, com, task, heading, command, diagnostics)
+    def poisoned(self, t, x, com, task, heading, command, diagnostics):
+        evaluate_into(self, t, x, com, task, heading, command, diagnostics)
         if self.evaluations > 300:
             command[0] = float("nan")
 
-    monkeypatch.setattr(_DecoupledControllerBase, "_evaluate_into", poisoned)
+    monkeypatch.setattr(_DecoupledControllerBase, "evaluate_into", poisoned)
     with pytest.raises(dut.SimulationFailed) as info:
         dut.run_scenario(short_nominal(), out_dir=tmp_path, progress=False)
     message = str(info.value)

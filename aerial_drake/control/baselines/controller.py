@@ -1,21 +1,19 @@
-"""The baselines as one Drake LeafSystem with the paper controller's ports
-(:mod:`aerial_drake.control.interface`): :mod:`.vehicle` for ``[f, mu]``, :mod:`.arm` for
+"""The baselines as one controller on :class:`aerial_drake.control.base.ControllerBase` (the
+paper controller's ports, hold and cache): :mod:`.vehicle` for ``[f, mu]``, :mod:`.arm` for
 ``tau``, on the controller's rigid model of the plant.
 
 ``uncoupled`` and ``static_compensation`` differ in one term: the latter adds the arm's
 static moment about the body's centre of mass (:func:`.vehicle.static_arm_moment`) to the
-body torques. Sampled (``period`` > 0) they hold their command between samples exactly as
-:class:`aerial_drake.control.controller.DecoupledController` does.
+body torques.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from pydrake.common.value import AbstractValue
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import Frame, JacobianWrtVariable, RigidBody
-from pydrake.systems.framework import Context, LeafSystem, ValueProducer
 
+from aerial_drake.control.base import ControllerBase
 from aerial_drake.control.baselines.arm import fixed_base_task_torque
 from aerial_drake.control.baselines.params import BASELINE_TYPES, BaselineParams
 from aerial_drake.control.baselines.vehicle import (
@@ -23,32 +21,34 @@ from aerial_drake.control.baselines.vehicle import (
     geometric_vehicle_law,
     static_arm_moment,
 )
-from aerial_drake.control.controller import (
-    NONFINITE_STATE,
-    _at_time,
-    _ControllerPorts,
-    task_jacobian,
-)
-from aerial_drake.control.interface import error_diagnostics
+from aerial_drake.control.controller import task_jacobian
 from aerial_drake.control.law import (
     AssumptionViolation,
     GainMatrices,
     Gains,
-    diagnostics_size,
+    rotation_angle,
     task_error,
 )
 from aerial_drake.robots.task import TaskLayout
 from aerial_drake.trajectories.reference import (
-    COM_REFERENCE_SIZE,
-    HEADING_REFERENCE_SIZE,
-    task_reference_size,
     unpack_com_reference,
     unpack_heading_reference,
     unpack_task_reference,
 )
 
 
-class BaselineController(_ControllerPorts, LeafSystem):
+def baseline_diagnostics_layout(n: int) -> tuple[tuple[str, int], ...]:
+    """The baselines' diagnostics for a task of ``n`` rows: the vehicle's attitude errors
+    ``e_R``, ``w_tilde`` (Lee et al.'s e_R, e_w) and ``base_attitude_error`` (angle of
+    R_d^T R, R_d the attitude it commands), its desired force's norm ``f_d_norm``, the arm's
+    task error ``y_tilde`` (:func:`aerial_drake.control.law.task_error`), sliding variable
+    ``z_tilde`` (s of :func:`.arm.fixed_base_task_torque`) and ``sigma_min_arm``, the least
+    singular value of its fixed-base task Jacobian."""
+    return (("e_R", 3), ("w_tilde", 3), ("base_attitude_error", 1), ("f_d_norm", 1),
+            ("y_tilde", n), ("z_tilde", n), ("sigma_min_arm", 1))
+
+
+class BaselineController(ControllerBase):
     """``uncoupled`` or ``static_compensation`` (docs/baselines.md) on ``plant``, the
     controller's rigid model.
 
@@ -68,18 +68,16 @@ class BaselineController(_ControllerPorts, LeafSystem):
                  task: TaskLayout, gains: Gains, *,
                  kind: str, body_offset_H: np.ndarray, params: BaselineParams | None = None,
                  period: float = 0.0):
-        super().__init__()
         if kind not in BASELINE_TYPES:
             raise ValueError(f"unknown baseline '{kind}'; valid: {BASELINE_TYPES}")
-        if not period >= 0.0:
-            raise ValueError(f"period must be >= 0 (s); got {period}")
+        nv = plant.num_velocities()
+        super().__init__(plant, task, period=period,
+                         diagnostics_layout=baseline_diagnostics_layout(nv - 6))
         self.kind = kind
         self._params = (params or BaselineParams()).validate()
         self._plant, self._base, self._frame = plant, base_body, end_effector_frame
         self._ctx = plant.CreateDefaultContext()
-        nv = plant.num_velocities()
-        self._n = nv - 6
-        self._K = GainMatrices.from_gains(gains, n_task=self._n)
+        self._K = GainMatrices.from_gains(gains, n_task=nv - 6)
         self._task = task
         self._arm_v = np.arange(6, nv)
         self._offset_H = np.asarray(body_offset_H, dtype=float)
@@ -91,39 +89,16 @@ class BaselineController(_ControllerPorts, LeafSystem):
         else:
             I_B = base_body.CalcSpatialInertiaInBodyFrame(self._ctx)
             self._J_v = I_B.CalcRotationalInertia().CopyToFullMatrix3()
-        self._period = float(period)
-        self.evaluations = 0
-        nx = plant.num_positions() + nv
-        self._state_port = self.DeclareVectorInputPort("state", nx)
-        self._ref_ports = tuple(self.DeclareVectorInputPort(name, size) for name, size in (
-            ("com_reference", COM_REFERENCE_SIZE),
-            ("task_reference", task_reference_size(task.n_joints)),
-            ("heading_reference", HEADING_REFERENCE_SIZE)))
-        sizes = (4 + self._n, diagnostics_size(self._n))
-        if self._period > 0.0:
-            self._held = self._declare_held_outputs(sizes, self._sample)
-            return
-        self._solution = self.DeclareCacheEntry(
-            description="baseline law", value_producer=ValueProducer(
-                allocate=AbstractValue.Make(object()).Clone, calc=self._calc_solution),
-            prerequisites_of_calc={self.all_input_ports_ticket(), self.time_ticket()})
-        for i, (name, size) in enumerate(zip(("command", "diagnostics"), sizes)):
-            self.DeclareVectorOutputPort(
-                name, size, lambda c, o, i=i: o.SetFromVector(self._solution.Eval(c)[i]),
-                prerequisites_of_calc={self._solution.ticket()})
 
     # --- The law ------------------------------------------------------------------------
-    def evaluate(self, x: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
-                 ) -> tuple[np.ndarray, np.ndarray]:
-        """``(command, diagnostics)`` at state ``x`` and the packed references.
+    def calc_command(self, t: float, x: np.ndarray, com: np.ndarray, task: np.ndarray,
+                     heading: np.ndarray) -> tuple[np.ndarray, dict]:
+        """The command at state ``x`` and the packed references, with the entries of
+        :func:`baseline_diagnostics_layout`.
 
         Raises:
-            FloatingPointError: a non-finite state.
             AssumptionViolation: the arm's task Jacobian is singular, or |F| vanishes.
         """
-        if not np.all(np.isfinite(x)):
-            raise FloatingPointError(NONFINITE_STATE)
-        self.evaluations += 1
         plant, ctx, K = self._plant, self._ctx, self._K
         world = plant.world_frame()
         plant.SetPositionsAndVelocities(ctx, x)
@@ -132,10 +107,9 @@ class BaselineController(_ControllerPorts, LeafSystem):
         R, p_b = X_WB.rotation().matrix(), X_WB.translation()
         w_b = R.T @ V_WB.rotational()
         x_g = plant.CalcCenterOfMassPositionInWorld(ctx)
-        x_g_dot = plant.CalcCenterOfMassTranslationalVelocityInWorld(ctx)
         X_WE = self._frame.CalcPoseInWorld(ctx)
         com_ref = unpack_com_reference(com)
-        t = unpack_task_reference(task)
+        ref = unpack_task_reference(task)
         b1d = unpack_heading_reference(heading)
 
         # The vehicle alone (Lee et al.), on its own body position and attitude.
@@ -169,9 +143,9 @@ class BaselineController(_ControllerPorts, LeafSystem):
         M_aa = plant.CalcMassMatrix(ctx)[np.ix_(self._arm_v, self._arm_v)]
         h_a = (plant.CalcBiasTerm(ctx) - plant.CalcGravityGeneralizedForces(ctx))[self._arm_v]
         q_j = x[list(self._task.joint_positions)]
-        y_t, _ = task_error(X_WE.translation(), X_WE.rotation().matrix(), q_j, t.p_ed, t.R_ed,
-                            t.q_jd, rows)
-        y_d_dot, y_d_ddot = t.full_dot[rows], t.full_ddot[rows]
+        y_t, _ = task_error(X_WE.translation(), X_WE.rotation().matrix(), q_j, ref.p_ed, ref.R_ed,
+                            ref.q_jd, rows)
+        y_d_dot, y_d_ddot = ref.full_dot[rows], ref.full_ddot[rows]
         arm = fixed_base_task_torque(J_a, bias, M_aa, h_a, y_dot, y_t, y_d_dot, y_d_ddot,
                                      K.K_y, K.K_z)
         if not arm.sigma_min > self._params.sigma_min_limit:
@@ -180,34 +154,7 @@ class BaselineController(_ControllerPorts, LeafSystem):
                 f"{arm.sigma_min:.3g} (limit {self._params.sigma_min_limit:g})")
 
         command = np.concatenate([[veh.f], mu, arm.tau])
-        diagnostics = error_diagnostics(
-            task=self._task, x_g=x_g, x_g_dot=x_g_dot, com_reference=com_ref,
-            p_WE=X_WE.translation(), R_WE=X_WE.rotation().matrix(), q_j=q_j, p_ed=t.p_ed,
-            R_ed=t.R_ed, q_jd=t.q_jd,
-            R_b=R, R_d=veh.R_d, e_R=veh.e_R, w_tilde=veh.e_w, z_tilde=arm.s,
-            sigma_min_J3=arm.sigma_min, f_d_norm=veh.F_norm, thrust_residual=[0.0, 0.0])
-        return command, diagnostics
-
-    def law_at(self, context: Context) -> tuple[np.ndarray, np.ndarray]:
-        """``(command, diagnostics)`` at this system's ``context``; errors name the time."""
-        try:
-            return self.evaluate(self._state_port.Eval(context),
-                                 *(p.Eval(context) for p in self._ref_ports))
-        except (AssumptionViolation, FloatingPointError) as err:
-            raise _at_time(err, context) from None
-
-    # --- Sampling -------------------------------------------------------------------------
-    def hold_sample(self, context: Context) -> None:
-        """Run the law at ``context`` and hold it (as the periodic update does)."""
-        if self._period <= 0.0:
-            raise RuntimeError("hold_sample: this controller is continuous (period 0)")
-        self._sample(context, context.get_mutable_discrete_state())
-
-    def _sample(self, context: Context, discrete_state) -> None:
-        command, diagnostics = self.law_at(context)
-        discrete_state.set_value(self._held[0], command)
-        discrete_state.set_value(self._held[1], diagnostics)
-
-    def _calc_solution(self, context: Context, value: AbstractValue) -> None:
-        value.set_value(self.law_at(context))
-
+        return command, {"e_R": veh.e_R, "w_tilde": veh.e_w,
+                         "base_attitude_error": rotation_angle(veh.R_d.T @ R),
+                         "f_d_norm": veh.F_norm, "y_tilde": y_t, "z_tilde": arm.s,
+                         "sigma_min_arm": arm.sigma_min}

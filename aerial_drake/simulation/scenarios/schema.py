@@ -18,9 +18,9 @@ from pydrake.systems.analysis import SimulatorConfig
 from aerial_drake.control.baselines.params import BaselineParams
 from aerial_drake.control.gains import Gains
 from aerial_drake.control.law import F_D_LIMIT, SIGMA_MIN_J3_LIMIT
+from aerial_drake.control.registry import PAPER_CONTROLLER
 from aerial_drake.robots.description import DEFAULT_ROBOT, RobotDescription
 from aerial_drake.robots.models import AerialManipulator, make_plant
-from aerial_drake.simulation.controllers import PAPER_CONTROLLER
 from aerial_drake.simulation.scenarios.checks import (
     DEFAULT_MAX_LOG_MB,
     current_target,
@@ -106,7 +106,7 @@ class ControllerConfig:
     """Which controller closes the loop (docs/baselines.md); all use the scenario's gains."""
 
     # "paper" (Section III), "uncoupled", "static_compensation", or a name registered with
-    # aerial_drake.simulation.controllers.register_controller.
+    # aerial_drake.control.registry.register_controller.
     type: str = PAPER_CONTROLLER
     # The baselines' own parameters (used by "uncoupled" and "static_compensation").
     baseline: BaselineParams = field(default_factory=BaselineParams)

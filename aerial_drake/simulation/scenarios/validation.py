@@ -20,8 +20,8 @@ import numpy as np
 from pydrake.systems.analysis import GetIntegrationSchemes
 
 from aerial_drake.control.gains import GainError
+from aerial_drake.control.registry import controller_types
 from aerial_drake.robots.task import parse_task
-from aerial_drake.simulation.controllers import controller_types
 from aerial_drake.simulation.scenarios.checks import (
     ACCURACY,
     AIRSPEED,

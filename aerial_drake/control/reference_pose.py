@@ -1,6 +1,8 @@
 """The configuration that realises the reference at one instant: where a run starts
 (:func:`aerial_drake.simulation.runner.set_initial_state`) and what the baselines' body
-reference is measured from (:mod:`aerial_drake.simulation.controllers`)."""
+reference is measured from (:func:`body_offset_in_heading_frame`). In the control layer: it
+needs only the law's (10) and (13), the model and the reference, and the controller registry
+(:mod:`aerial_drake.control.registry`) builds the baselines with it."""
 
 from __future__ import annotations
 
@@ -22,8 +24,8 @@ def reference_configuration(scenario: Any, model: AerialManipulator, t: float = 
     on x_d, base attitude R_d of (13) for zero CoM error, end effector on (p_ed, R_ed),
     the task's joints at their targets. ``reference``: the run's reference (None: built from
     ``scenario.trajectory``). (``scenario`` a
-    :class:`~aerial_drake.simulation.scenarios.Scenario`; not imported here, as the scenarios
-    import the controllers, which import this.)"""
+    :class:`~aerial_drake.simulation.scenarios.Scenario`; not imported here: the scenarios
+    are the simulation layer's, above this one.)"""
     if reference is None:
         reference = reference_of(scenario.trajectory, model.task_joint_nominal())
     ref = reference.evaluate(t)
@@ -53,3 +55,21 @@ def mass_and_gravity(model: AerialManipulator) -> tuple[float, float]:
     plant = model.plant
     return (plant.CalcTotalMass(plant.CreateDefaultContext()),
             -plant.gravity_field().gravity_vector()[2])
+
+
+def body_offset_in_heading_frame(scenario: Any, model: AerialManipulator,
+                                 reference: ReferenceSource | None = None) -> np.ndarray:
+    """The CoM's offset from the vehicle body at the reference configuration of t = 0, in
+    the heading frame [b1d, e3 x b1d, e3]: what the baselines' body reference keeps
+    (:func:`aerial_drake.control.baselines.vehicle.body_reference`). ``reference``: the run's
+    reference (None: built from ``scenario.trajectory``)."""
+    if reference is None:
+        reference = reference_of(scenario.trajectory, model.task_joint_nominal())
+    plant = model.plant
+    ctx = plant.CreateDefaultContext()
+    plant.SetPositions(ctx, reference_configuration(scenario, model, reference=reference))
+    p_b = plant.EvalBodyPoseInWorld(ctx, model.base_body).translation()
+    offset = plant.CalcCenterOfMassPositionInWorld(ctx) - p_b
+    b1 = reference.evaluate(0.0).b1d[0]
+    H = np.column_stack([b1, np.cross([0.0, 0.0, 1.0], b1), [0.0, 0.0, 1.0]])
+    return H.T @ offset
