@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 from pydrake.common.yaml import yaml_dump, yaml_load_typed
+from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
 
 from aerial_drake.control.baselines.params import BaselineParams
@@ -48,6 +49,12 @@ from aerial_drake.simulation.scenarios.perturbations import (
 )
 from aerial_drake.simulation.scenarios.reading import read_scenario_file
 from aerial_drake.simulation.scenarios.trajectory import check_trajectory, resolve_python_path
+from aerial_drake.simulation.scenarios.world import (
+    Environment,
+    check_world,
+    continuous_plant,
+    resolve_environment,
+)
 from aerial_drake.trajectories.params import TrajectoryParams
 
 DISTURBANCE_TARGETS = ("helicopter", "end_effector")
@@ -165,6 +172,11 @@ class Scenario:
     sensing: Sensing = field(default_factory=Sensing)
     random_disturbances: RandomDisturbances = field(default_factory=RandomDisturbances)
 
+    # The world (docs/world.md): Drake's MultibodyPlantConfig of the simulated plant (default:
+    # continuous, time_step 0) and the environment's model directives (default: none).
+    plant: MultibodyPlantConfig = field(default_factory=continuous_plant)
+    environment: Environment = field(default_factory=Environment)
+
     def validate(self) -> "Scenario":
         """Check every value (type, finiteness, range, consistency: :mod:`.checks`); raise
         ScenarioError naming the field, the value, the allowed range and the fix. Returns
@@ -174,6 +186,7 @@ class Scenario:
         check_trajectory(self, np.array(facts.joint_nominal))
         self._validate_controller()
         check_perturbations(self)
+        check_world(self)
         return self
 
     def robot_description(self) -> RobotDescription:
@@ -357,6 +370,8 @@ def load_scenario(name_or_path: str | Path, *, overrides: dict | None = None) ->
     if overrides:
         scenario = apply_overrides(scenario, overrides)
     scenario = resolve_python_path(_resolve_robot(scenario, path), path)
+    scenario = dataclasses.replace(scenario, environment=resolve_environment(
+        scenario.environment, path.resolve().parent))
     try:
         return scenario.validate()
     except ScenarioError as err:
