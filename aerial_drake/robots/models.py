@@ -111,7 +111,8 @@ class AerialManipulator:
     description: RobotDescription
     #: The task with its joints resolved (finalized plant only; None before).
     task: TaskLayout | None
-    #: The model instances of the environment (walls, tables, objects; not the robot's).
+    #: The robot's model instances, and the environment's (walls, tables, objects).
+    model_instances: tuple[ModelInstanceIndex, ...] = ()
     environment: tuple[ModelInstanceIndex, ...] = ()
 
     # --- Coordinates -------------------------------------------------------------------
@@ -182,12 +183,10 @@ class AerialManipulator:
 
     # --- Properties of the model -------------------------------------------------------
     def total_mass(self) -> float:
-        """Default mass of the robot's bodies [kg] (54.8 kg for the paper's robot): every body
-        but World and the environment's."""
-        plant, world = self.plant, {int(i) for i in self.environment}
-        return float(sum(plant.get_body(b).default_mass() for i in range(
-            plant.num_model_instances()) if i not in world for b in plant.GetBodyIndices(
-                ModelInstanceIndex(i)) if b != plant.world_body().index()))
+        """Default mass of the robot's bodies [kg] (54.8 kg for the paper's robot)."""
+        plant = self.plant
+        return float(sum(plant.get_body(b).default_mass() for i in self.model_instances
+                         for b in plant.GetBodyIndices(i)))
 
     def arm_effort_limits(self) -> np.ndarray:
         """Torque limits of the arm's actuators [N m] (the description's, else the model's)."""
@@ -328,6 +327,7 @@ def add_aerial_manipulator(
         floating_base=floating_base,
         description=robot,
         task=task,
+        model_instances=own,
         environment=world,
     )
 

@@ -18,7 +18,7 @@ from pydrake.multibody.parsing import ModelDirective, ModelDirectives
 from pydrake.multibody.plant import MultibodyPlant, MultibodyPlantConfig
 
 from aerial_drake.robots.description import RobotDescription, RobotDescriptionError
-from aerial_drake.robots.environment import WorldError
+from aerial_drake.robots.environment import WorldError, environment_parser
 from aerial_drake.robots.models import add_aerial_manipulator
 from aerial_drake.simulation.scenarios.checks import Range, ScenarioError, number, text
 
@@ -106,12 +106,13 @@ def check_environment(environment: Environment, robot: RobotDescription, variant
     """Parse the environment beside the robot into a scratch plant (no simulation): a missing
     file, an unknown package, a model Drake cannot read, a weld to the robot all fail here,
     before a run, as a ScenarioError naming ``environment``."""
-    if not environment.directives:
-        return
     try:
-        add_aerial_manipulator(MultibodyPlant(0.0), variant, robot=robot,
-                               environment=environment.model_directives(),
-                               environment_packages=environment.packages)
+        if environment.directives:
+            add_aerial_manipulator(MultibodyPlant(0.0), variant, robot=robot,
+                                   environment=environment.model_directives(),
+                                   environment_packages=environment.packages)
+        elif environment.packages:
+            environment_parser(MultibodyPlant(0.0), environment.packages)
     except WorldError as err:
         field_name = str(err).split(":", 1)[0]
         raise ScenarioError(str(err), field_name) from None
