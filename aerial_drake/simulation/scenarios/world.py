@@ -20,7 +20,14 @@ from pydrake.multibody.plant import MultibodyPlant, MultibodyPlantConfig
 from aerial_drake.robots.description import RobotDescription, RobotDescriptionError
 from aerial_drake.robots.environment import WorldError, environment_parser
 from aerial_drake.robots.models import add_aerial_manipulator
-from aerial_drake.simulation.scenarios.checks import Range, ScenarioError, number, text
+from aerial_drake.simulation.scenarios.checks import (
+    Range,
+    ScenarioError,
+    flag,
+    number,
+    show,
+    text,
+)
 
 #: The choices of MultibodyPlantConfig's text fields (Drake's documentation of the struct;
 #: tests/simulation/test_world.py holds them against Drake's own parser of each).
@@ -88,6 +95,8 @@ def check_plant(config: MultibodyPlantConfig, controller_period: float) -> None:
          DISCRETE_CONTACT_APPROXIMATIONS)
     text("plant.contact_surface_representation", config.contact_surface_representation,
          CONTACT_SURFACE_REPRESENTATIONS)
+    flag("plant.adjacent_bodies_collision_filters", config.adjacent_bodies_collision_filters)
+    flag("plant.use_sampled_output_ports", config.use_sampled_output_ports)
     if step == 0.0:
         return
     ratio = controller_period / step
@@ -106,6 +115,16 @@ def check_environment(environment: Environment, robot: RobotDescription, variant
     """Parse the environment beside the robot into a scratch plant (no simulation): a missing
     file, an unknown package, a model Drake cannot read, a weld to the robot all fail here,
     before a run, as a ScenarioError naming ``environment``."""
+    if not isinstance(environment.packages, list):
+        raise ScenarioError(f"environment.packages must be a list of folders; got "
+                            f"{show(environment.packages)}", "environment.packages")
+    for i, folder in enumerate(environment.packages):
+        text(f"environment.packages[{i}]", folder)
+    if not isinstance(environment.directives, list) or not all(
+            isinstance(d, ModelDirective) for d in environment.directives):
+        raise ScenarioError("environment.directives must be a list of Drake model directives "
+                            "(add_model, add_weld, ...; docs/world.md); got "
+                            f"{show(environment.directives)}", "environment.directives")
     try:
         if environment.directives:
             add_aerial_manipulator(MultibodyPlant(0.0), variant, robot=robot,
