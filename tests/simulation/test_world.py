@@ -98,11 +98,22 @@ def test_wall_out_of_reach_changes_no_number(tmp_path, nominal_run):
         np.testing.assert_array_equal(walled.log[key], nominal_run.log[key], err_msg=key)
 
 
-def test_discrete_plant_with_a_table_and_a_free_box_runs(tmp_path, nominal_run):
-    """time_step 1e-3 with SAP: the robot flies (near the continuous run: the same law on the
-    same reference, the plant stepped by 1 ms instead of integrated) and the free box rests
-    on the table."""
-    scenario = load(scenario_file(tmp_path, TABLE_AND_BOX))
+def hover_file(tmp_path, extra: str = ""):
+    """Nominal's scenario hovering at its trajectory's centre: the arm at postures within its
+    joint limits (the paper's trajectory starts with joint 6 past its limit, docs/control.md,
+    which a discrete plant enforces and the continuous one does not)."""
+    path = tmp_path / f"hover{len(extra)}.yaml"
+    path.write_text(NOMINAL.replace("trajectory:\n", "trajectory:\n  kind: hover\n  hover:\n"
+                                    "    ee_position: [0.6, 0.0, 1.3]\n", 1) + extra)
+    return path
+
+
+def test_discrete_plant_with_a_table_and_a_free_box_runs(tmp_path):
+    """time_step 1e-3 with SAP: the robot hovers as on the continuous plant (the same law, the
+    plant stepped every 1 ms instead of integrated by RK3: 2e-3 apart at most over 1 s,
+    measured) and the free box rests on the table."""
+    continuous = run_scenario(load(hover_file(tmp_path)), progress=False)
+    scenario = load(hover_file(tmp_path, TABLE_AND_BOX))
     result = run_scenario(scenario, progress=False)
     assert result.completed
     loop = build_closed_loop(scenario)
@@ -111,10 +122,8 @@ def test_discrete_plant_with_a_table_and_a_free_box_runs(tmp_path, nominal_run):
     x = result.log["plant_state"]
     assert np.isfinite(x).all()
     robot = x[:, sim.rigid_state_indices]
-    assert robot.shape == nominal_run.log["plant_state"].shape
-    # Position of the vehicle: within 2 cm of the continuous run over the transient.
-    base = sim.base_position_indices[4:]
-    assert np.abs(robot[:, base] - nominal_run.log["plant_state"][:, base]).max() < 0.02
+    assert robot.shape == continuous.log["plant_state"].shape
+    np.testing.assert_allclose(robot, continuous.log["plant_state"], rtol=0, atol=5e-3)
     box = sim.plant.GetBodyByName("box").floating_positions_start()
     # On the table top (0.75 m) to within 3 mm of SAP's compliance: it neither fell nor sank.
     assert abs(x[-1, box + 6] - 0.8) < 3e-3
