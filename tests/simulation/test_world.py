@@ -155,6 +155,13 @@ def test_relative_paths_start_at_the_scenario_file(tmp_path):
     (WALL.format(file="no_such_wall.sdf"), "environment", "Drake could not process"),
     ("environment:\n  packages: [no_such_folder]\n", "environment.packages[0]",
      "no package.xml"),
+    # Misspelt or mistyped, found before Drake's loader (which says what, not where).
+    ("plant:\n  time_stepp: 1.0\n", "plant.time_stepp", "not a field of plant"),
+    ("plant: 5\n", "plant", "expected a section of fields"),
+    ("plant:\n  time_step: abc\n", "plant.time_step", "expected a number"),
+    ("environment:\n  directives:\n  - add_modell: {name: x}\n", "environment.directives[0]",
+     "expected one of add_model, "),
+    ("environment:\n  directives:\n  - 5\n", "environment.directives[0]", "got 5"),
 ])
 def test_bad_world_is_a_scenario_error(tmp_path, extra, field, message):
     with pytest.raises(ScenarioError, match=message) as err:

@@ -53,6 +53,7 @@ from aerial_drake.simulation.scenarios.world import (
     Environment,
     check_world,
     continuous_plant,
+    find_bad_world_field,
     resolve_environment,
 )
 from aerial_drake.trajectories.params import TrajectoryParams
@@ -355,7 +356,7 @@ def load_scenario(name_or_path: str | Path, *, overrides: dict | None = None) ->
         # A field only some Drake releases have: checked and removed in one place.
         if translate_simulator_section(data.get("simulator"), "simulator"):
             text = yaml_dump(data)
-        bad = _find_bad_field(data, Scenario)
+        bad = _find_bad_field(data, Scenario) or find_bad_world_field(data)
         if bad:
             raise ScenarioError(f"{path}: {bad}", bad.split(" ")[0])
         scenario = yaml_load_typed(schema=Scenario, data=text)

@@ -24,6 +24,7 @@ from aerial_drake.simulation.scenarios.checks import (
     Range,
     ScenarioError,
     flag,
+    is_number,
     number,
     show,
     text,
@@ -60,6 +61,44 @@ class Environment:
     def model_directives(self) -> ModelDirectives | None:
         """The directives as Drake's ``ModelDirectives`` (None without any: nothing to add)."""
         return ModelDirectives(directives=list(self.directives)) if self.directives else None
+
+
+def find_bad_world_field(data: dict) -> str | None:
+    """The dotted name of the first value of a scenario file's ``plant`` or
+    ``environment.directives`` that does not fit its type, with what was expected (Drake's
+    loader says what failed, not where); None if none."""
+    plant = data.get("plant", {})
+    if not isinstance(plant, dict):
+        return f"plant (expected a section of fields, got {show(plant)})"
+    kinds = {f.name: f.type for f in MultibodyPlantConfig.__fields__}
+    for key, value in plant.items():
+        if key not in kinds:
+            return f"plant.{key} (not a field of plant; fields: {', '.join(kinds)})"
+        kind = kinds[key]
+        if kind is float and not is_number(value) and not _number_text(value):
+            return f"plant.{key} (expected a number, got {show(value)})"
+        if kind in (bool, str) and not isinstance(value, kind):
+            return f"plant.{key} (expected {'true or false' if kind is bool else 'text'}, " \
+                   f"got {show(value)})"
+    environment = data.get("environment", {})
+    directives = environment.get("directives") if isinstance(environment, dict) else None
+    names = [f.name for f in ModelDirective.__fields__]
+    for i, directive in enumerate(directives if isinstance(directives, list) else []):
+        if not isinstance(directive, dict) or len(directive) != 1 or any(
+                k not in names for k in directive):
+            return f"environment.directives[{i}] (expected one of {', '.join(names)}, got " \
+                   f"{show(directive)})"
+    return None
+
+
+def _number_text(value: Any) -> bool:
+    """YAML 1.1 reads 1e-3 as text; Drake's loader converts it."""
+    if not isinstance(value, str):
+        return False
+    try:
+        return math.isfinite(float(value))
+    except ValueError:
+        return False
 
 
 def resolve_environment(environment: Environment, folder: Path) -> Environment:
