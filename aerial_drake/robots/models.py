@@ -22,12 +22,19 @@ per-model-instance ports rather than offsets.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from pydrake.geometry import SceneGraph
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
-from pydrake.multibody.plant import AddMultibodyPlantSceneGraph, MultibodyPlant
+from pydrake.multibody.parsing import ModelDirectives
+from pydrake.multibody.plant import (
+    AddMultibodyPlant,
+    AddMultibodyPlantSceneGraph,
+    MultibodyPlant,
+    MultibodyPlantConfig,
+)
 from pydrake.multibody.tree import (
     FixedOffsetFrame,
     Frame,
@@ -46,6 +53,7 @@ from aerial_drake.robots.description import (
     RobotDescriptionError,
     default_robot,
 )
+from aerial_drake.robots.environment import add_environment
 from aerial_drake.robots.parsing import make_parser, parse_models
 from aerial_drake.robots.structure import (
     actuator_of,
@@ -103,6 +111,9 @@ class AerialManipulator:
     description: RobotDescription
     #: The task with its joints resolved (finalized plant only; None before).
     task: TaskLayout | None
+    #: The robot's model instances, and the environment's (walls, tables, objects).
+    model_instances: tuple[ModelInstanceIndex, ...] = ()
+    environment: tuple[ModelInstanceIndex, ...] = ()
 
     # --- Coordinates -------------------------------------------------------------------
     @property
@@ -172,12 +183,10 @@ class AerialManipulator:
 
     # --- Properties of the model -------------------------------------------------------
     def total_mass(self) -> float:
-        """Default mass of every body but World [kg] (54.8 kg for the paper's robot)."""
+        """Default mass of the robot's bodies [kg] (54.8 kg for the paper's robot)."""
         plant = self.plant
-        return float(sum(plant.get_body(plant.GetBodyIndices(i)[k]).default_mass()
-                         for i in map(ModelInstanceIndex, range(plant.num_model_instances()))
-                         for k in range(len(plant.GetBodyIndices(i)))
-                         if plant.GetBodyIndices(i)[k] != plant.world_body().index()))
+        return float(sum(plant.get_body(b).default_mass() for i in self.model_instances
+                         for b in plant.GetBodyIndices(i)))
 
     def arm_effort_limits(self) -> np.ndarray:
         """Torque limits of the arm's actuators [N m] (the description's, else the model's)."""
@@ -229,8 +238,11 @@ def add_aerial_manipulator(
     finalize: bool = True,
     scene_graph: SceneGraph | None = None,
     robot: RobotDescription | None = None,
+    environment: ModelDirectives | None = None,
+    environment_packages: Sequence[str] = (),
 ) -> AerialManipulator:
-    """Parses ``robot``'s models (its plant ``variant``) into ``plant`` and checks them.
+    """Parses ``robot``'s models (its plant ``variant``) into ``plant`` and checks them, then
+    the ``environment`` directives (:mod:`aerial_drake.robots.environment`).
 
     Args:
         plant: an unfinalized plant, registered with a SceneGraph (visual geometry is then
@@ -244,16 +256,21 @@ def add_aerial_manipulator(
         scene_graph: stored on the result for convenience; the plant's own registration
             decides whether geometry is added.
         robot: the description (default: the paper's helicopter with the LWR).
+        environment: model directives of the world around the robot (None: none), parsed
+            after the robot (its coordinates come first) with ``environment_packages``.
 
     Raises:
         RobotDescriptionError: naming the field of the description to change.
+        WorldError: naming the environment's directive, file or package at fault.
     """
     robot = robot if robot is not None else default_robot()
     _check_choice("floating_base", floating_base, FLOATING_BASES)
     _check_choice("plant variant", variant, robot.variant_names())
+    first = plant.num_model_instances()
     parse_models(plant, robot, variant)
+    own = tuple(map(ModelInstanceIndex, range(first, plant.num_model_instances())))
     base_body = find_body(plant, robot.vehicle_body, robot, "vehicle_body")
-    structure = check_structure(plant, robot, variant, base_body)
+    structure = check_structure(plant, robot, variant, base_body, own)
     com = base_body.default_com()
     if variant == RIGID_VARIANT and np.linalg.norm(com) > COM_OFFSET_TOLERANCE:
         raise RobotDescriptionError(
@@ -287,6 +304,8 @@ def add_aerial_manipulator(
         X_BE = RigidTransform(RollPitchYaw(ee.offset_rpy), np.asarray(ee.offset_xyz, float))
         frame = plant.AddFrame(FixedOffsetFrame(
             END_EFFECTOR_FRAME, structure.end_effector_body.body_frame(), X_BE))
+    world = () if environment is None else add_environment(
+        plant, environment, environment_packages, robot=own)
     task = None
     if finalize:
         plant.Finalize()
@@ -308,6 +327,8 @@ def add_aerial_manipulator(
         floating_base=floating_base,
         description=robot,
         task=task,
+        model_instances=own,
+        environment=world,
     )
 
 
@@ -340,13 +361,19 @@ def add_to_builder(
     time_step: float = 0.0,
     floating_base: str = "quaternion",
     robot: RobotDescription | None = None,
+    plant_config: MultibodyPlantConfig | None = None,
+    environment: ModelDirectives | None = None,
+    environment_packages: Sequence[str] = (),
 ) -> AerialManipulator:
-    """Adds a plant and SceneGraph (``AddMultibodyPlantSceneGraph``) holding the finalized
-    aerial manipulator to ``builder``."""
-    plant, scene_graph = AddMultibodyPlantSceneGraph(builder, time_step)
+    """Adds a plant and SceneGraph holding the finalized aerial manipulator (and the
+    ``environment``, :func:`add_aerial_manipulator`) to ``builder``: Drake's
+    ``AddMultibodyPlant(plant_config)`` if given (its ``time_step`` wins), else
+    ``AddMultibodyPlantSceneGraph(builder, time_step)``."""
+    plant, scene_graph = (AddMultibodyPlantSceneGraph(builder, time_step) if plant_config is None
+                          else AddMultibodyPlant(plant_config, builder))
     return add_aerial_manipulator(
-        plant, variant, floating_base=floating_base, scene_graph=scene_graph, robot=robot
-    )
+        plant, variant, floating_base=floating_base, scene_graph=scene_graph, robot=robot,
+        environment=environment, environment_packages=environment_packages)
 
 
 def set_nominal_posture(

@@ -5,6 +5,7 @@ Each failure is a RobotDescriptionError naming the description's field to change
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 from pydrake.multibody.plant import MultibodyPlant
@@ -83,7 +84,7 @@ def _find_joint(plant: MultibodyPlant, name: str, robot: RobotDescription, field
 
 @dataclass(frozen=True)
 class Structure:
-    """What :func:`_check_structure` found: the arm's joints in chain order, the rotors."""
+    """What :func:`check_structure` found: the arm's joints in chain order, the rotors."""
 
     arm_joints: tuple[Joint, ...]
     rotor_joints: tuple[Joint, ...]
@@ -91,11 +92,14 @@ class Structure:
 
 
 def check_structure(plant: MultibodyPlant, robot: RobotDescription, variant: str,
-                     vehicle: RigidBody) -> Structure:
+                    vehicle: RigidBody, instances: Sequence[ModelInstanceIndex] | None = None,
+                    ) -> Structure:
     """The checks of the module docstring on an unfinalized plant (before Drake adds floating
-    joints to free bodies)."""
+    joints to free bodies), over the robot's model ``instances`` (None: every model in the
+    plant); other models' bodies and joints (the environment's) are not the robot's."""
     src = robot.source
-    joints = _all_joints(plant)
+    own = None if instances is None else {int(i) for i in instances}
+    joints = [j for j in _all_joints(plant) if own is None or int(j.model_instance()) in own]
     inboard = {j.child_body().index(): j for j in joints}
     if vehicle.index() in inboard:
         j = inboard[vehicle.index()]
@@ -114,7 +118,8 @@ def check_structure(plant: MultibodyPlant, robot: RobotDescription, variant: str
         for j in children.get(stack.pop(), []):
             below.add(j.child_body().index())
             stack.append(j.child_body().index())
-    stray = [plant.get_body(i) for i in _all_body_indices(plant) if i not in below]
+    stray = [plant.get_body(i) for i in _all_body_indices(plant) if i not in below
+             and (own is None or int(plant.get_body(i).model_instance()) in own)]
     if stray:
         raise RobotDescriptionError(
             f"{src}: body '{_scoped(plant, stray[0])}' is not connected to the vehicle "

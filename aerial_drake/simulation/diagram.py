@@ -229,7 +229,11 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
     inputs left to connect); the returned :class:`ClosedLoop` names its ports."""
     inputs, outputs = {}, {}
     robot = scenario.robot_description()
-    sim = add_to_builder(builder, scenario.plant_variant, time_step=0.0, robot=robot)
+    # The scenario's plant config (default continuous) and environment (docs/world.md).
+    sim = add_to_builder(builder, scenario.plant_variant, robot=robot,
+                         plant_config=scenario.plant,
+                         environment=scenario.environment.model_directives(),
+                         environment_packages=scenario.environment.packages)
     plant = sim.plant
     plant.set_name("plant")
     model = scenario.controller_model()

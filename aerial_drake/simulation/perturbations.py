@@ -11,10 +11,18 @@ robot description gets the same treatment.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from pydrake.math import RigidTransform
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import BodyIndex, RigidBody, RotationalInertia, SpatialInertia
+from pydrake.multibody.tree import (
+    BodyIndex,
+    ModelInstanceIndex,
+    RigidBody,
+    RotationalInertia,
+    SpatialInertia,
+)
 from pydrake.systems.framework import Context
 
 from aerial_drake.robots.models import AerialManipulator
@@ -23,10 +31,13 @@ from aerial_drake.simulation.scenarios import Scenario
 from aerial_drake.simulation.scenarios.perturbations import ModelMismatch, Payload
 
 
-def massive_bodies(plant: MultibodyPlant, context: Context) -> list[RigidBody]:
-    """The plant's bodies with mass, World excepted, in index order (the order of draws)."""
+def massive_bodies(plant: MultibodyPlant, context: Context,
+                   exclude: Sequence[ModelInstanceIndex] = ()) -> list[RigidBody]:
+    """The plant's bodies with mass, World and the ``exclude`` models' (the environment's)
+    excepted, in index order (the order of draws)."""
+    skip = {int(i) for i in exclude}
     bodies = [plant.get_body(BodyIndex(i)) for i in range(1, plant.num_bodies())]
-    return [b for b in bodies if b.get_mass(context) > 0]
+    return [b for b in bodies if b.get_mass(context) > 0 and int(b.model_instance()) not in skip]
 
 
 def perturbed_inertia(M_BBo_B: SpatialInertia, mass_factor: float, inertia_factor: float,
@@ -52,8 +63,9 @@ def radius_of_gyration(M_BBo_B: SpatialInertia) -> float:
     return float(np.sqrt(np.trace(I) / (2.0 * M_BBo_B.get_mass())))
 
 
-def apply_model_mismatch(mismatch: ModelMismatch, plant: MultibodyPlant,
-                         context: Context) -> dict[str, dict[str, float]]:
+def apply_model_mismatch(mismatch: ModelMismatch, plant: MultibodyPlant, context: Context,
+                         exclude: Sequence[ModelInstanceIndex] = ()
+                         ) -> dict[str, dict[str, float]]:
     """Set every massive body's inertial parameters in ``context`` (the simulated plant's) as
     ``mismatch`` says; returns ``{body: {mass_factor, inertia_factor, com_shift_m}}`` drawn
     (empty when the section is off: nothing is touched)."""
@@ -61,7 +73,7 @@ def apply_model_mismatch(mismatch: ModelMismatch, plant: MultibodyPlant,
         return {}
     rng = np.random.default_rng(mismatch.seed)
     applied = {}
-    for body in massive_bodies(plant, context):
+    for body in massive_bodies(plant, context, exclude):
         M = body.CalcSpatialInertiaInBodyFrame(context)
         # Draw all three for every body, whichever errors are on, so that turning one error
         # off leaves the others' draws as they were.
@@ -106,7 +118,7 @@ def apply_plant_perturbations(scenario: Scenario, sim: AerialManipulator,
                               context: Context) -> None:
     """The scenario's model mismatch, then its payload (itself exact: it is what is held), on
     the simulated plant's ``context``."""
-    apply_model_mismatch(scenario.model_mismatch, sim.plant, context)
+    apply_model_mismatch(scenario.model_mismatch, sim.plant, context, sim.environment)
     apply_payload(scenario.payload, sim, context)
 
 

@@ -64,7 +64,7 @@ def validate_trajectory(params: TrajectoryParams, n_joints: int | None = None) -
     """ValueError naming every bad field of the ``trajectory:`` section and how to fix it:
     the kind (one of the registry's), its own section, the shared fields. ``n_joints``: the
     task's joint components, where a kind's section gives joint angles (None: not checked)."""
-    if params.kind not in REFERENCE_KINDS:
+    if not isinstance(params.kind, str) or params.kind not in REFERENCE_KINDS:
         raise ValueError(f"Invalid TrajectoryParams: 'kind' must be one of {KINDS}, got "
                          f"{params.kind!r}.")
     section = REFERENCE_KINDS[params.kind].section

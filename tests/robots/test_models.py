@@ -233,9 +233,11 @@ def _check_models_load_from(site, tmp_path):
     """A fresh interpreter that sees only ``site`` finds the models there and builds both
     variants from them."""
     installed = site / "aerial_drake" / "sdf"
-    for path in (CHECKOUT / "models" / "sdf").iterdir():
-        if path.is_file():
-            assert (installed / path.name).read_bytes() == path.read_bytes(), path.name
+    source = CHECKOUT / "models" / "sdf"
+    for path in source.rglob("*"):  # the environment models in their subfolder too
+        if path.is_file() and "__pycache__" not in path.parts:
+            name = path.relative_to(source)
+            assert (installed / name).read_bytes() == path.read_bytes(), name
     script = (
         "from aerial_drake.robots.resources import model_directory\n"
         "from aerial_drake.robots.models import make_plant\n"

@@ -367,3 +367,10 @@ def test_waypoint_joints_are_checked_against_the_task_once():
                                          r"joints' must be a list of 1 floats"):
         reference_of(params, [0.0])
     reference_of(params, [0.1, 0.2])
+
+
+@pytest.mark.parametrize("kind", [["paper"], {"a": 1}, 3, None])
+def test_a_kind_that_is_not_text_is_named_not_a_crash(kind):
+    params = dataclasses.replace(TrajectoryParams(), kind=kind)
+    with pytest.raises(ValueError, match="'kind' must be one of"):
+        validate_trajectory(params)

@@ -15,6 +15,7 @@ from aerial_drake.simulation.scenarios.overrides import apply_overrides
 from aerial_drake.simulation.scenarios.reading import read_scenario_file
 from aerial_drake.simulation.scenarios.schema import Scenario
 from aerial_drake.simulation.scenarios.trajectory import resolve_python_path
+from aerial_drake.simulation.scenarios.world import find_bad_world_field, resolve_environment
 
 __all__ = ["load_scenario", "shipped_scenarios", "scenario_directory"]
 
@@ -57,7 +58,7 @@ def load_scenario(name_or_path: str | Path, *, overrides: dict | None = None) ->
         # A field only some Drake releases have: checked and removed in one place.
         if translate_simulator_section(data.get("simulator"), "simulator"):
             text = yaml_dump(data)
-        bad = find_bad_field(data, Scenario)
+        bad = find_bad_field(data, Scenario) or find_bad_world_field(data)
         if bad:
             raise ScenarioError(f"{path}: {bad}", bad.split(" ")[0])
         scenario = yaml_load_typed(schema=Scenario, data=text)
@@ -72,6 +73,8 @@ def load_scenario(name_or_path: str | Path, *, overrides: dict | None = None) ->
     if overrides:
         scenario = apply_overrides(scenario, overrides)
     scenario = resolve_python_path(_resolve_robot(scenario, path), path)
+    scenario = dataclasses.replace(scenario, environment=resolve_environment(
+        scenario.environment, path.resolve().parent))
     try:
         return scenario.validate()
     except ScenarioError as err:

@@ -13,6 +13,7 @@ integrator.
 import math
 from dataclasses import dataclass, field
 
+from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
 
 from aerial_drake.control.baselines.params import BaselineParams
@@ -34,6 +35,7 @@ from aerial_drake.simulation.scenarios.perturbations import (
     Wind,
 )
 from aerial_drake.simulation.scenarios.robot import robot_description
+from aerial_drake.simulation.scenarios.world import Environment, continuous_plant
 from aerial_drake.trajectories.params import TrajectoryParams
 
 __all__ = ["Scenario", "Disturbance", "InitialCondition", "Actuation", "Rotors",
@@ -159,6 +161,11 @@ class Scenario:
     wind: Wind = field(default_factory=Wind)
     sensing: Sensing = field(default_factory=Sensing)
     random_disturbances: RandomDisturbances = field(default_factory=RandomDisturbances)
+
+    # The world (docs/world.md): Drake's MultibodyPlantConfig of the simulated plant (default:
+    # continuous, time_step 0) and the environment's model directives (default: none).
+    plant: MultibodyPlantConfig = field(default_factory=continuous_plant)
+    environment: Environment = field(default_factory=Environment)
 
     def validate(self) -> "Scenario":
         """Check every value (:func:`.validation.validate_scenario`: type, finiteness, range,

@@ -79,6 +79,7 @@ from aerial_drake.simulation.scenarios.checks import (
 )
 from aerial_drake.simulation.scenarios.robot import robot_description, robot_facts
 from aerial_drake.simulation.scenarios.trajectory import check_trajectory
+from aerial_drake.simulation.scenarios.world import check_world
 
 
 def validate_scenario(s: Any) -> None:
@@ -90,6 +91,7 @@ def validate_scenario(s: Any) -> None:
     check_trajectory(s, np.array(facts.joint_nominal))
     _check_controller(s.controller)
     check_perturbations(s)
+    check_world(s)
 
 
 def _check_gains(gains: Any, n_task: int, task_rows: tuple[int, ...]) -> None:
