@@ -12,7 +12,7 @@ callgrind), while the two diagrams compute the same doubles.
 Ports of the closed loop (the Diagram's exported ports, or :meth:`ClosedLoop.input_port` and
 :meth:`ClosedLoop.output_port` either way):
 
-- inputs ``helicopter_wrench`` and ``end_effector_wrench``: ``[torque; force]`` in World (6).
+- inputs ``vehicle_wrench`` and ``end_effector_wrench``: ``[torque; force]`` in World (6).
 - outputs ``plant_state``, ``command`` (what the controller asks for, held between samples),
   ``applied_command`` (what reaches the plant, after lag and saturation), ``diagnostics``,
   ``com_reference``, ``task_reference``, ``heading_reference``, ``query_object`` (for
@@ -22,6 +22,7 @@ Ports of the closed loop (the Diagram's exported ports, or :meth:`ClosedLoop.inp
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -78,8 +79,9 @@ class ClosedLoop:
     sensor: Any = None
 
     def input_port(self, name: str) -> InputPort:
-        """The closed loop's input port ``name`` (``helicopter_wrench``, ...)."""
-        return _port(self.inputs, name, "input")
+        """The closed loop's input port ``name`` (``vehicle_wrench``, ...). The earlier name
+        ``helicopter_wrench`` still answers, with a FutureWarning naming today's."""
+        return _port(self.inputs, _current_port_name(name), "input")
 
     def output_port(self, name: str) -> OutputPort:
         """The closed loop's output port ``name`` (``plant_state``, ``command``, ...)."""
@@ -87,6 +89,19 @@ class ClosedLoop:
 
     def has_output_port(self, name: str) -> bool:
         return name in self.outputs
+
+
+#: Port names of earlier releases -> today's (the vehicle is not always a helicopter).
+OLD_PORT_NAMES = {"helicopter_wrench": "vehicle_wrench"}
+
+
+def _current_port_name(name: str) -> str:
+    if name in OLD_PORT_NAMES:
+        warnings.warn(f"the closed loop's port {name!r} is now {OLD_PORT_NAMES[name]!r}; "
+                      f"ask for {OLD_PORT_NAMES[name]!r} (the old name will be removed)",
+                      FutureWarning, stacklevel=3)
+        return OLD_PORT_NAMES[name]
+    return name
 
 
 def _port(ports: dict, name: str, kind: str):
@@ -285,7 +300,7 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
     # Disturbances: at the helicopter frame as a generalized force, at the end effector as a
     # spatial force at the end-effector point.
     to_generalized = builder.AddSystem(MatrixGain(free_body_wrench_map(plant.num_velocities())))
-    to_generalized.set_name("helicopter_wrench_to_generalized_force")
+    to_generalized.set_name("vehicle_wrench_to_generalized_force")
     builder.Connect(to_generalized.get_output_port(),
                     plant.get_applied_generalized_force_input_port())
     ee_wrench = builder.AddSystem(PointWrenchApplier(
@@ -297,7 +312,7 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
     builder.Connect(base_forces, forces.get_input_port(0))
     builder.Connect(ee_wrench.get_output_port(), forces.get_input_port(1))
     builder.Connect(forces.get_output_port(), plant.get_applied_spatial_force_input_port())
-    inputs["helicopter_wrench"] = to_generalized.get_input_port()
+    inputs["vehicle_wrench"] = to_generalized.get_input_port()
     inputs["end_effector_wrench"] = ee_wrench.get_input_port()
 
     if sim.rotor_joints:
@@ -356,7 +371,7 @@ def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = Non
     scenario = resolve_random_disturbances(scenario)
     loop = add_closed_loop(builder, scenario, controller_factory=controller_factory)
     sim = loop.simulated_plant
-    for target, port in (("vehicle", "helicopter_wrench"),
+    for target, port in (("vehicle", "vehicle_wrench"),
                          ("end_effector", "end_effector_wrench")):
         wrench = add_wrench_source(builder, scenario.disturbances, target).get_output_port()
         if target == "vehicle":  # the wind's drag acts beside the windows (wind.py)

@@ -23,7 +23,7 @@ samples), so the simulation's cost is one drag evaluation per step.
 
 Drag (body axes B): ``F_B = c_1 v_r + c_2 |v_r| v_r`` per axis, with ``v_r = R_BW (w - v)``
 the wind relative to the vehicle's origin; the force in World goes to the closed loop's
-``helicopter_wrench`` input beside the disturbance windows.
+``vehicle_wrench`` input beside the disturbance windows.
 """
 
 from __future__ import annotations
@@ -144,7 +144,7 @@ def add_wind(builder: DiagramBuilder, wind: Wind, duration: float, plant: Multib
                     drag.GetInputPort("body_spatial_velocities"))
     builder.Connect(source.get_output_port(), drag.GetInputPort("wind_velocity"))
     total = builder.AddSystem(Adder(2, 6))
-    total.set_name("helicopter_wrench_with_wind")
+    total.set_name("vehicle_wrench_with_wind")
     builder.Connect(wrench, total.get_input_port(0))
     builder.Connect(drag.GetOutputPort("wrench"), total.get_input_port(1))
     return total.get_output_port()

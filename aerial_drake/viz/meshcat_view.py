@@ -93,7 +93,7 @@ PATH_RATE = 100.0
 
 _HEAD_LENGTH = 0.12  # m, of an arrow's head
 _TRIAD_RGB = ((0.9, 0.1, 0.1), (0.1, 0.75, 0.1), (0.1, 0.2, 0.9))
-_HELICOPTER_GREEN = Rgba(0.1, 0.7, 0.2, 1.0)
+_VEHICLE_GREEN = Rgba(0.1, 0.7, 0.2, 1.0)
 _END_EFFECTOR_ORANGE = Rgba(1.0, 0.5, 0.0, 1.0)
 
 #: Overlay paths (under ``OVERLAY_PREFIX``) and what they show.
@@ -105,7 +105,7 @@ OVERLAY_PATHS = {
     "com_desired": "desired CoM x_d (sphere)",
     "com_actual": "actual CoM (sphere)",
     "base_attitude_desired": "desired base attitude R_d at the actual CoM (faint triad)",
-    "force_helicopter": "disturbance force on the helicopter (green arrow)",
+    "force_vehicle": "disturbance force on the vehicle (green arrow)",
     "force_end_effector": "disturbance force on the end effector (orange arrow)",
 }
 
@@ -169,7 +169,7 @@ class TrackingOverlay(LeafSystem):
 
     - ``plant_state``: the simulated plant's state (either variant).
     - ``com_reference`` (15), ``task_reference`` (24 + 3 n_j), ``heading_reference`` (9).
-    - ``helicopter_wrench``, ``end_effector_wrench``: ``[torque; force]`` in World (6).
+    - ``vehicle_wrench``, ``end_effector_wrench``: ``[torque; force]`` in World (6).
 
     A periodic publish (``publish_period``) sends every pose with the simulation time as the
     recording time; an initialization publish (re)draws the static objects. The actual
@@ -209,7 +209,7 @@ class TrackingOverlay(LeafSystem):
             "task_reference", task_reference_size(self._model.task.n_joints))
         self._heading_port = self.DeclareVectorInputPort("heading_reference",
                                                          HEADING_REFERENCE_SIZE)
-        self._heli_port = self.DeclareVectorInputPort("helicopter_wrench", 6)
+        self._vehicle_port = self.DeclareVectorInputPort("vehicle_wrench", 6)
         self._ee_port = self.DeclareVectorInputPort("end_effector_wrench", 6)
         self.DeclareInitializationPublishEvent(self._draw_static)
         self.DeclarePeriodicPublishEvent(publish_period, 0.0, self._draw_frame)
@@ -231,7 +231,7 @@ class TrackingOverlay(LeafSystem):
         _triad(m, p("base_attitude_desired"), length=0.6, radius=0.008, alpha=0.3)
         m.SetObject(p("com_desired"), Sphere(0.05), Rgba(0.0, 0.75, 0.85, 0.6))
         m.SetObject(p("com_actual"), Sphere(0.035), Rgba(0.05, 0.05, 0.35, 1.0))
-        _arrow(m, p("force_helicopter"), _HELICOPTER_GREEN)
+        _arrow(m, p("force_vehicle"), _VEHICLE_GREEN)
         _arrow(m, p("force_end_effector"), _END_EFFECTOR_ORANGE)
         self._shown = {}
         return self._draw_frame(context)
@@ -259,7 +259,7 @@ class TrackingOverlay(LeafSystem):
             m.SetTransform(p("base_attitude_desired"),
                            RigidTransform(RotationMatrix(R_d), p_WG), t)
         # Disturbance forces at their points of application.
-        for name, port, point in (("force_helicopter", self._heli_port, X_WB.translation()),
+        for name, port, point in (("force_vehicle", self._vehicle_port, X_WB.translation()),
                                   ("force_end_effector", self._ee_port, X_WE.translation())):
             self._draw_force(p(name), port.Eval(context)[3:], point, t)
         return EventStatus.Succeeded()
@@ -349,7 +349,7 @@ class MeshcatView:
             builder.Connect(loop.output_port(port), overlay.GetInputPort(port))
         # The disturbance sources are whatever drives the closed loop's wrench inputs.
         sources = builder.connection_map()
-        for port in ("helicopter_wrench", "end_effector_wrench"):
+        for port in ("vehicle_wrench", "end_effector_wrench"):
             wrench_input = loop.input_port(port)
             system, index = sources[(wrench_input.get_system(), wrench_input.get_index())]
             builder.Connect(system.get_output_port(index), overlay.GetInputPort(port))

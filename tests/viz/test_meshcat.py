@@ -129,7 +129,7 @@ def test_replay_animates_robot_and_overlays(watched):
     for path in ROBOT_PATHS + ROTOR_PATHS:
         assert f"{dut.ROBOT_PREFIX}/{path}".encode() in animation, path
     for name in ("ee_actual", "ee_desired", "com_actual", "com_desired",
-                 "base_attitude_desired", "force_helicopter", "force_end_effector"):
+                 "base_attitude_desired", "force_vehicle", "force_end_effector"):
         assert f"{dut.OVERLAY_PREFIX}/{name}".encode() in animation, name
     assert b"visible" in animation  # the arrows come and go with their windows
     # The static lines are objects of the scene (animations carry no objects).
@@ -306,7 +306,7 @@ def test_browser_replay_shows_robot_and_animates_overlays(watched, chromium, tmp
             np.testing.assert_allclose(ee["position"], p_WE, atol=1e-5, err_msg=f"t={t}")
             np.testing.assert_allclose(com["position"], p_WG, atol=1e-5, err_msg=f"t={t}")
             np.testing.assert_allclose(body["position"], p_WB, atol=1e-5, err_msg=f"t={t}")
-            heli = _read(page, f"{dut.OVERLAY_PREFIX}/force_helicopter")
+            heli = _read(page, f"{dut.OVERLAY_PREFIX}/force_vehicle")
             end = _read(page, f"{dut.OVERLAY_PREFIX}/force_end_effector")
             assert heli["visible"] == (0.1 <= t < 0.2), t
             assert end["visible"] == (t >= 0.2), t
