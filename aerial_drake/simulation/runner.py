@@ -323,7 +323,8 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
                        f"{likely_cause(scenario)}")
         metrics = run_metrics(scenario, loop, arrays, layouts, wall, sim_time)
         result = RunResult(scenario=scenario, log=arrays, metrics=metrics, wall_time_s=wall,
-                           completed=failure is None, failure=failure, layouts=layouts)
+                           completed=failure is None, failure=failure, layouts=layouts,
+                           task_labels=_task_labels(loop))
         extra = extra_files() if extra_files is not None else {}
         if lock is not None:
             result.out_dir = write_outputs(result, lock.folder, extra)
@@ -339,6 +340,12 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
         error.result = result
         raise error
     return result
+
+
+def _task_labels(loop: ClosedLoop) -> tuple[str, ...]:
+    """One name per task row of the run's robot (stored with the log's layout)."""
+    task = loop.controller_model.task
+    return task.labels if task is not None else ()
 
 
 def _note_replaced_results(scenario: Scenario, folder: Path, stream: TextIO) -> None:

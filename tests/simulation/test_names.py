@@ -1,5 +1,6 @@
-"""Public names say ``vehicle`` (any vehicle, not only the paper's helicopter); the earlier
-``helicopter`` names still answer, each with a FutureWarning naming today's."""
+"""Public names say ``vehicle`` (any vehicle, not only the paper's helicopter): the earlier
+``helicopter`` names still answer, each with a FutureWarning naming today's. A run's log
+stores one label per task row."""
 
 import warnings
 
@@ -21,3 +22,17 @@ def test_the_closed_loop_port_is_vehicle_wrench_and_the_old_name_warns():
     assert old.get_index() == port.get_index()
     with pytest.raises(KeyError, match="vehicle_wrench"):
         loop.input_port("rotor_wrench")
+
+
+def test_a_run_stores_its_task_labels_with_the_log(tmp_path):
+    import json
+
+    import numpy as np
+
+    from aerial_drake.simulation.runner import run_scenario
+    result = run_scenario(load_scenario("nominal", overrides={"duration": 0.01}),
+                          out_dir=tmp_path, progress=False)
+    expected = ("p_x", "p_y", "p_z", "o_x", "o_y", "o_z")
+    assert result.task_labels[:6] == expected and len(result.task_labels) == 7
+    layout = json.loads(str(np.load(tmp_path / "log.npz")["layout"]))
+    assert tuple(layout["task"]) == result.task_labels
