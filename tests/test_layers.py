@@ -45,7 +45,7 @@ RANKS = {
 }
 
 #: Only the compiled law's kernels may pass the size limit (its docstring says why).
-MAX_LINES = 500
+MAX_LINES = 400
 LONG_MODULES = {"aerial_drake.control.compiled.kernels"}
 
 

@@ -1,7 +1,7 @@
 """Robot descriptions: what is flown, as a typed YAML file (``*.robot.yaml``).
 
 A description names the model files, the vehicle body, the arm's joints, the end-effector frame,
-the task and the input limits; :func:`aerial_drake.robots.models.build_robot` turns it into a
+the task and the input limits; :func:`aerial_drake.robots.models.make_plant` turns it into a
 MultibodyPlant and checks it against the paper's assumptions. The shipped robots are
 ``models/sdf/*.robot.yaml`` (``helicopter_lwr``: the paper's); a scenario's ``robot`` field
 names one of them or gives the path of the user's own. Field by field in ``docs/robots.md``.
@@ -135,7 +135,8 @@ class RobotDescription:
         return self.source.parent if self.source is not None else model_directory()
 
     def validate(self) -> "RobotDescription":
-        """Check the values that need no plant (the rest: ``build_robot``). Returns self."""
+        """Check the values that need no plant (the rest when the plant is built:
+        :func:`aerial_drake.robots.structure.check_structure`). Returns self."""
         where = f"{self.source}: " if self.source is not None else ""
 
         def fail(name: str, message: str):

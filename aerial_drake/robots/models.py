@@ -1,10 +1,11 @@
 """An aerial manipulator as a Drake MultibodyPlant, built from a robot description.
 
-:func:`build_robot` parses a :class:`~aerial_drake.robots.description.RobotDescription`'s model
-files into a plant and checks what the paper's law needs of it (the checks name the field to
-change): a free vehicle body whose frame is at its centre of mass, every other body hanging
-below it, the arm a serial chain of actuated revolute joints from the vehicle to the end
-effector, and a task with as many coordinates as the arm has joints (no redundancy).
+:func:`add_aerial_manipulator` (and :func:`make_plant`, a plant of its own) parses a
+:class:`~aerial_drake.robots.description.RobotDescription`'s model files into a plant and
+checks what the paper's law needs of it (the checks name the field to change): a free
+vehicle body whose frame is at its centre of mass, every other body of the robot below it, the
+arm a serial chain of actuated revolute joints from the vehicle to the end effector, and a task
+with as many coordinates as the arm has joints (no redundancy).
 
 The shipped robots (``models/sdf/*.robot.yaml``):
 

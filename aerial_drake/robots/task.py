@@ -20,7 +20,7 @@ zero error, :mod:`aerial_drake.control.law`). The components:
 
 The task vector is the rows in the order listed; gains K_y, K_z are given in that order. This
 module is pure data: joint indices are resolved when the plant is built
-(:func:`aerial_drake.robots.models.build_robot`).
+(:func:`aerial_drake.robots.models.add_aerial_manipulator`).
 """
 
 from __future__ import annotations
