@@ -65,7 +65,15 @@ def imports_of(name: str, path: Path):
     """``(line, imported module)`` for every import of the package in the module, including
     imports inside functions; ``from a.b import c`` names ``a.b.c`` when that is a module."""
     is_package = path.name == "__init__.py"
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+    tree = ast.parse(path.read_text(), str(path))
+    # The package root names the public API for the type checker only (``if TYPE_CHECKING:``)
+    # and imports it lazily (PEP 562): those imports never run (test_public_api).
+    type_only = {id(n) for block in ast.walk(tree) if name == "aerial_drake"
+                 and isinstance(block, ast.If) and isinstance(block.test, ast.Name)
+                 and block.test.id == "TYPE_CHECKING" for n in ast.walk(block)}
+    for node in ast.walk(tree):
+        if id(node) in type_only:
+            continue
         if isinstance(node, ast.Import):
             targets = [alias.name for alias in node.names]
         elif isinstance(node, ast.ImportFrom):

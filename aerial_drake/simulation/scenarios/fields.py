@@ -1,6 +1,6 @@
 """Raw YAML data held against the schema's types, to name the field that does not fit
 (Drake's loader says what failed to convert, not where): used on a scenario file's data
-(:mod:`.loading`) and on overrides (:mod:`.overrides`)."""
+(:mod:`.loading`) and on overrides (:mod:`aerial_drake.simulation.scenarios.overrides`)."""
 
 # No "from __future__ import annotations": the schema's field types are compared as objects.
 import dataclasses

@@ -1,7 +1,7 @@
 """The scenario's schema: one dataclass tree, every field with its unit in a comment above it
 (Drake's style), read by :func:`~aerial_drake.simulation.scenarios.loading.load_scenario`
 and checked by :mod:`~aerial_drake.simulation.scenarios.validation` (the perturbation
-sections are in :mod:`.perturbations`).
+sections are in :mod:`aerial_drake.simulation.scenarios.perturbations`).
 
 A scenario holds every number of a run: Table II's gains, the trajectory constants of
 (28)-(33), the initial offset, the actuator limits of Table I, the disturbance windows, the
