@@ -341,9 +341,9 @@ def test_nominal_posture(variant, record_property):
     )[:, manip.arm_velocity_indices]
     sigma_6 = np.linalg.svd(J_BE_B, compute_uv=False)
     sigma_7 = np.linalg.svd(np.vstack([J_BE_B, np.eye(7)[2]]), compute_uv=False)
-    record_property("sigma_min_6x7", sigma_6[-1])
-    record_property("sigma_min_7x7", sigma_7[-1])
-    record_property("cond_7x7", sigma_7[0] / sigma_7[-1])
+    record_property("sigma_min_6x7", float(sigma_6[-1]))
+    record_property("sigma_min_7x7", float(sigma_7[-1]))
+    record_property("cond_7x7", float(sigma_7[0] / sigma_7[-1]))
     assert sigma_6[-1] > 0.2 and sigma_7[-1] > 0.2
     assert sigma_7[0] / sigma_7[-1] < 10
 
