@@ -136,7 +136,8 @@ class CompiledLaw:
                  f_d_limit: float):
         nb, nv = tree.parent.size, tree.reflected_inertia.size
         gains = np.ravel(gains).astype(float)
-        if gains.size != _packed_gains_size(nv - 6):
+        # The kernel's own count run as Python (py_func): nothing compiles outside compile_law.
+        if gains.size != _packed_gains_size.py_func(nv - 6):
             raise ValueError(f"{gains.size} gains for {nv} velocities: see pack_gains")
         self._model, self._index = _pack_law(tree, num_positions, end_effector, task, gains,
                                              (sigma_min_J3_limit, f_d_limit))
