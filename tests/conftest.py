@@ -24,6 +24,19 @@ def pytest_runtest_makereport(item, call):
         report.longrepr = f"skipped in CI (CI is set), which counts as a failure: {reason}"
 
 
+#: Session fixtures too costly to build once per worker under pytest-xdist (``-n auto``): the
+#: tests that use one run on one worker (``--dist loadgroup``, the README's test command), so
+#: each is built once per session as without xdist.
+SHARED_SESSION_FIXTURES = ("full_paper",)
+
+
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        for name in SHARED_SESSION_FIXTURES:
+            if name in getattr(item, "fixturenames", ()):
+                item.add_marker(pytest.mark.xdist_group(name))
+
+
 @pytest.fixture(scope="session")
 def full_paper(tmp_path_factory):
     """`aerial-drake run paper` in full (nominal and disturbed, 15 s each), run once per test

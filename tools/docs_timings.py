@@ -7,7 +7,8 @@ Measures, one after the other on this machine, in a warm numba cache:
 - ``aerial-drake run paper``: each run's simulation wall time (``metrics.json``'s
   ``wall_time_s``) and the whole command's (both runs, figures, summary);
 - ``aerial-drake analyze``, the full analysis, and ``analyze --fast``;
-- with ``--suite``: ``python -m pytest -q``, the whole test suite.
+- with ``--suite``: ``python -m pytest -q -n auto --dist loadgroup``, the whole test suite
+  (the README's test command).
 
 Prints one Markdown table with the date (UTC), the interpreter, drake and the machine's core
 count. README.md, docs/paper.md and docs/analysis.md quote these numbers with that date;
@@ -59,8 +60,9 @@ def main(argv: list[str] | None = None) -> int:
         fast = timed(*cli, "analyze", "--fast", "--quiet", "--out", str(out / "fast"))
         rows.append(("`aerial-drake analyze --fast`", f"{fast:.0f} s"))
     if args.suite:
-        suite = timed(sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider")
-        rows.append(("`python -m pytest -q` (whole suite)",
+        suite = timed(sys.executable, "-m", "pytest", "-q", "-n", "auto", "--dist", "loadgroup",
+                      "-p", "no:cacheprovider")
+        rows.append(("`python -m pytest -q -n auto --dist loadgroup` (whole suite)",
                      f"{int(suite // 60)} min {suite % 60:02.0f} s"))
     when = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
     print(f"Measured {when} by `python tools/docs_timings.py{' --suite' if args.suite else ''}`"
