@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from aerial_drake.simulation.outputs import OutputError, finite_or_none
+from aerial_drake.studies.table import read_table_text
 
 #: The study file's fields that are part of its identity (module docstring).
 SPEC_FIELDS = ("name", "duration", "seed", "parameters")
@@ -68,13 +69,8 @@ def check_same_study(table: Path, provenance: Path, now: dict[str, Any]) -> None
     ``study`` section), or if it has rows but no readable ``provenance``."""
     fix = ("give another --out for the new spec, or --restart to discard the folder's "
            "results and run the study from the start")
-    try:
-        with open(table, encoding="utf-8", errors="replace") as f:
-            has_rows = sum(1 for _ in zip(range(2), f)) > 1
-    except FileNotFoundError:
-        return
-    if not has_rows:
-        return
+    if not table.is_file() or len(read_table_text(table, fix).splitlines()) < 2:
+        return  # no rows: nothing to mix with
     try:
         stored = json.loads(provenance.read_text(encoding="utf-8"))["study"]
     except (OSError, ValueError, KeyError, TypeError) as err:

@@ -5,8 +5,9 @@ Run again, a study skips the runs that have a row (a run's identity is the hash 
 resolved scenario), so an interrupted study resumes where it stopped: no run twice, none
 missing. One study at a time per folder (its lock, as a run folder's); a folder whose
 rows were run from another spec is refused (:mod:`aerial_drake.studies.identity`), or,
-with ``restart``, its results are discarded first. A signal (Ctrl-C, SIGTERM, SIGHUP) cancels the runs in flight, keeps every row
-written, closes the cluster and exits 128 + the signal's number.
+with ``restart``, its results are discarded first. A signal (Ctrl-C, SIGTERM, SIGHUP)
+cancels the runs in flight, keeps every row written, closes the cluster and exits 128 + the
+signal's number.
 """
 
 from __future__ import annotations
