@@ -162,9 +162,11 @@ def _add_study_parsers(sub: Any, common: argparse.ArgumentParser) -> None:
         "Dask; one row per run in OUT/results.csv (docs/studies.md)",
         description="Run a study file's runs on a local Dask cluster (default: one worker "
         "process per CPU) or on an existing cluster (--scheduler). Rows are written as runs "
-        "finish; run the same command again to resume an interrupted study.")
-    study.add_argument("file", help="a shipped study's name (robustness, gains, "
-                       "gains_attitude) or a study YAML file")
+        "finish; run the same command again to resume an interrupted study (of the same "
+        "spec: a changed one is refused, docs/studies.md).")
+    study.add_argument("file", help="a shipped study's name ("
+                       f"{', '.join(study_command.shipped_study_names())}) or a study YAML "
+                       "file")
     study.add_argument("--workers", type=int, default=None,
                        help="worker processes of the local cluster (default: one per CPU)")
     study.add_argument("--scheduler", default=None,
@@ -178,6 +180,9 @@ def _add_study_parsers(sub: Any, common: argparse.ArgumentParser) -> None:
                        help="print the scenario of one run (its run_id or index in the "
                             "table) as YAML, to reproduce it with 'aerial-drake run FILE.yaml'; "
                             "runs nothing")
+    study.add_argument("--restart", action="store_true",
+                       help="discard the folder's results.csv and provenance.json and run "
+                       "the study from the start (e.g. after changing its spec)")
     study.add_argument("--quiet", action="store_true", help="no progress bar")
     study.add_argument("--json", action="store_true", help="also print a JSON summary")
     study.set_defaults(func=study_command.cmd_study)

@@ -12,11 +12,20 @@ from typing import Any
 from aerial_drake.cli.errors import report_error
 
 
+def shipped_study_names() -> list[str]:
+    """The shipped studies' names (their files' folder read directly: nothing heavy is
+    imported to build the parser)."""
+    import aerial_drake.studies
+    folder = Path(aerial_drake.studies.__file__).resolve().parent / "files"
+    return sorted(p.stem for p in folder.glob("*.yaml"))
+
+
 def cmd_study(args: argparse.Namespace) -> int:
     """``aerial-drake study FILE [--workers N | --scheduler ADDRESS] [--out DIR]
-    [--duration S] [--draws N] [--quiet] [--json]``."""
+    [--duration S] [--draws N] [--restart] [--quiet] [--json]``."""
     from aerial_drake.simulation.outputs import OutputError, strict_json
     from aerial_drake.simulation.scenarios import ScenarioError
+    from aerial_drake.studies.executor import ClusterError
     from aerial_drake.studies.spec import load_study
     from aerial_drake.studies.study import run_study
 
@@ -40,8 +49,9 @@ def cmd_study(args: argparse.Namespace) -> int:
           flush=True)
     try:
         result = run_study(loaded, out, workers=args.workers, scheduler=args.scheduler,
-                           progress=not args.quiet, stream=sys.stderr)
-    except OutputError as err:
+                           progress=not args.quiet, stream=sys.stderr,
+                           restart=args.restart)
+    except (OutputError, ClusterError) as err:
         return report_error(args, 2, err)
     summary = {"planned": result.planned, "skipped_done_before": result.skipped,
                "ran": result.ran, "failed": result.failed, "table": str(result.table),
@@ -62,11 +72,20 @@ def cmd_study(args: argparse.Namespace) -> int:
 
 def _show_run(args: argparse.Namespace, loaded: Any) -> int:
     """Print one run's resolved scenario (by run id or index) as YAML, for ``aerial-drake
-    run``: a single run reproduces it exactly."""
-    from aerial_drake.studies.spec import plan_runs
+    run``: a single run reproduces it exactly. Its description is the study's (the run's
+    text carries the base's, which its id hashes), with the run's number and values."""
+    import dataclasses
+
+    from aerial_drake.studies.spec import plan_runs, scenario_from_text, scenario_text
     for run in plan_runs(loaded):
         if args.show_run in (run.run_id, str(run.index)):
-            sys.stdout.write(run.scenario_text)
+            values = ", ".join(f"{k} = {v:g}" for k, v in run.values.items())
+            about = (f"Run {run.index} (run_id {run.run_id}, draw {run.draw}"
+                     f"{': ' + values if values else ''}) of study '{loaded.study.name}'. "
+                     f"{loaded.study.description}").strip()
+            shown = dataclasses.replace(scenario_from_text(run.scenario_text),
+                                        description=about)
+            sys.stdout.write(scenario_text(shown))
             return 0
     return report_error(args, 2, f"--show-run: no run {args.show_run!r} in study "
                         f"'{loaded.study.name}' (give a run_id or an index from its table)")

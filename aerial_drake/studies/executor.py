@@ -26,26 +26,48 @@ from aerial_drake.studies.worker import ensure_warm, run_planned
 
 #: Retries of a run whose worker died, on the local cluster (module docstring).
 ALLOWED_FAILURES = 1
+#: How long a scheduler given by its address has to answer (s): a wrong address fails fast.
+CONNECT_TIMEOUT_S = 10
+
+
+class ClusterError(OSError):
+    """The scheduler at the address given cannot be reached (found before any run)."""
+
+
+def _connect(scheduler: str) -> Any:
+    from distributed import Client
+    try:
+        return Client(scheduler, timeout=f"{CONNECT_TIMEOUT_S}s")
+    except (OSError, TimeoutError, ValueError, TypeError) as err:
+        reason = " ".join(str(err).split()) or type(err).__name__
+        raise ClusterError(
+            f"--scheduler {scheduler}: no Dask scheduler answered there within "
+            f"{CONNECT_TIMEOUT_S} s ({reason[:200]}); nothing was run: check the address "
+            "(e.g. tcp://HOST:8786) and that the scheduler is running ('dask scheduler'), "
+            "or leave out --scheduler for a local cluster") from None
 
 
 @contextmanager
 def study_client(workers: int | None = None,
                  scheduler: str | None = None) -> Iterator[tuple[Any, dict[str, Any]]]:
     """A Dask client on a new local cluster of ``workers`` processes (default: one per CPU)
-    or on the scheduler at ``scheduler``; yields ``(client, description)``. Every worker is
+    or on the scheduler at ``scheduler`` (ClusterError if it does not answer within
+    CONNECT_TIMEOUT_S); yields ``(client, description)``. Every worker is
     warmed (:func:`~aerial_drake.studies.worker.ensure_warm`) before it takes a run. The
     local cluster is closed on the way out, whatever happened."""
     import dask
     from distributed import Client, LocalCluster
 
     if scheduler is not None:
-        client = Client(scheduler, timeout="30s")
+        client = _connect(scheduler)
         cluster = None
     else:
         n = workers or os.cpu_count() or 1
         with dask.config.set({"distributed.scheduler.allowed-failures": ALLOWED_FAILURES}):
+            # Each worker preloads the worker module: it ignores Ctrl-C (worker.dask_setup).
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR)
+                                   dashboard_address=None, silence_logs=logging.ERROR,
+                                   preload=["aerial_drake.studies.worker"])
         client = Client(cluster)
     try:
         client.run(ensure_warm)  # one worker of a machine compiles, the others then load

@@ -45,6 +45,7 @@ from aerial_drake.simulation.scenarios import (
 )
 from aerial_drake.simulation.scenarios.reading import read_scenario_file
 from aerial_drake.studies.metrics_table import DEFAULT_METRICS, metric_names
+from aerial_drake.studies.relative import absolute_paths
 
 KINDS = ("grid", "uniform", "normal", "seed")
 MODES = ("set", "scale")
@@ -139,7 +140,9 @@ def _deep_merge(base: dict, extra: dict) -> dict:
 
 def _base_scenario(path: Path, study: Study, settings: dict) -> Scenario:
     """The base scenario (shipped name, or a path relative to the study file) with the
-    settings and the duration applied, validated; errors name the study file's field."""
+    settings and the duration applied, validated; errors name the study file's field. A file
+    the base names (a robot ...) starts at the base's folder, one the settings name at the
+    study file's (:mod:`aerial_drake.studies.relative`)."""
     base = Path(study.base)
     if base.suffix:
         base = base if base.is_absolute() else path.parent / base
@@ -150,7 +153,9 @@ def _base_scenario(path: Path, study: Study, settings: dict) -> Scenario:
         raise ScenarioError(f"{path}: base: no shipped scenario {study.base!r} (shipped: "
                             f"{', '.join(shipped_scenarios())}) and not a .yaml path", "base")
     _, data = read_scenario_file(base_path)
-    merged = _deep_merge(data, settings)
+    # Each file's relative paths start at its own folder (the merged copy is written elsewhere).
+    merged = _deep_merge(absolute_paths(data, base_path.parent),
+                         absolute_paths(settings, path.parent))
     overrides = {} if math.isnan(study.duration) else {"duration": study.duration}
     # load_scenario reads a file (and names it in its errors, replaced below by the study's).
     with tempfile.TemporaryDirectory() as folder:

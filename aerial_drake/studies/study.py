@@ -3,8 +3,11 @@
 
 Run again, a study skips the runs that have a row (a run's identity is the hash of its
 resolved scenario), so an interrupted study resumes where it stopped: no run twice, none
-missing. A signal (Ctrl-C, SIGTERM, SIGHUP) cancels the runs in flight, keeps every row
-written, closes the cluster and exits 128 + the signal's number.
+missing. One study at a time per folder (its lock, as a run folder's); a folder whose
+rows were run from another spec is refused (:mod:`aerial_drake.studies.identity`), or,
+with ``restart``, its results are discarded first. A signal (Ctrl-C, SIGTERM, SIGHUP)
+cancels the runs in flight, keeps every row written, closes the cluster and exits 128 + the
+signal's number.
 """
 
 from __future__ import annotations
@@ -17,7 +20,9 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from aerial_drake.simulation.interrupts import handling
+from aerial_drake.simulation.outputs import prepare_folder
 from aerial_drake.studies.executor import execute, study_client
+from aerial_drake.studies.identity import check_same_study
 from aerial_drake.studies.metrics_table import metric_names
 from aerial_drake.studies.progress import StudyProgress
 from aerial_drake.studies.spec import LoadedStudy, PlannedRun, plan_runs, scenario_text
@@ -75,12 +80,29 @@ def _provenance(loaded: LoadedStudy, planned: int) -> dict[str, Any]:
 
 def run_study(loaded: LoadedStudy, out_dir: str | Path, *, workers: int | None = None,
               scheduler: str | None = None, progress: bool = True,
-              stream: TextIO | None = None) -> StudyResult:
+              stream: TextIO | None = None, restart: bool = False) -> StudyResult:
     """Run the study's runs that have no row yet in ``out_dir/results.csv`` (module
     docstring) on a local cluster of ``workers`` processes, or on the cluster at
-    ``scheduler``. OutputError if the folder holds another study's table."""
+    ``scheduler``; with ``restart``, the folder's results are discarded first. OutputError
+    (before any run) if another study holds the folder's lock, or the folder holds another
+    study's table or rows run from another spec (StudyChanged); ClusterError if the
+    scheduler cannot be reached."""
     out = Path(out_dir)
     runs = plan_runs(loaded)
+    lock = prepare_folder(out)
+    try:
+        return _run_locked(loaded, out, runs, workers, scheduler, progress, stream, restart)
+    finally:
+        lock.release()
+
+
+def _run_locked(loaded: LoadedStudy, out: Path, runs: list[PlannedRun], workers: int | None,
+                scheduler: str | None, progress: bool, stream: TextIO | None,
+                restart: bool) -> StudyResult:
+    if restart:
+        for name in (TABLE_NAME, PROVENANCE_NAME):
+            (out / name).unlink(missing_ok=True)
+    check_same_study(out / TABLE_NAME, out / PROVENANCE_NAME, _provenance(loaded, len(runs)))
     table = ResultsTable.open(out / TABLE_NAME, table_columns(loaded))
     planned_ids = {r.run_id for r in runs}
     done = table.done & planned_ids

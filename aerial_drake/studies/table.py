@@ -60,7 +60,7 @@ class ResultsTable:
         if not path.exists() or path.stat().st_size == 0:
             write_text_atomically(path, table._line(columns))
             return table
-        text = path.read_text(encoding="utf-8")
+        text = read_table_text(path, "give another --out, or --restart to start over")
         complete = text if text.endswith("\n") else text[:text.rfind("\n") + 1]
         reader = csv.reader(io.StringIO(complete))
         header = next(reader, None)
@@ -96,9 +96,20 @@ class ResultsTable:
         self.rows.append(dict(zip(self.columns, next(csv.reader([line])))))
 
 
+def read_table_text(path: Path, fix: str) -> str:
+    """The text of the table at ``path``; OutputError naming it and ``fix`` if it is not
+    UTF-8 text (not a study's table: they are written as UTF-8)."""
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as err:
+        raise OutputError(f"{path} is not a study's results table (not UTF-8 text: byte "
+                          f"{err.object[err.start]:#04x} at offset {err.start}): {fix}"
+                          ) from None
+
+
 def read_table(path: str | Path) -> list[dict[str, str]]:
     """A results table's complete rows as dicts of text (a cut-short last line left out)."""
-    text = Path(path).read_text(encoding="utf-8")
+    text = read_table_text(Path(path), "give a study's results.csv")
     if not text.endswith("\n"):
         text = text[:text.rfind("\n") + 1]
     reader = csv.DictReader(io.StringIO(text))

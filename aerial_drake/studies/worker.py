@@ -6,12 +6,18 @@ Workers start warm: :func:`ensure_warm` compiles the numba kernels (or loads the
 on-disk cache) once per process, under a lock file shared by every worker of a machine, so
 that the first compiles and writes the cache while the others wait, then load it (a cold
 cache compiled by every worker at once costs that many times the memory, and the time).
+
+The local cluster's workers preload this module (:func:`dask_setup`): they ignore SIGINT, so
+a Ctrl-C in the terminal (sent to every process of the foreground group) reaches only the
+study, which cancels the runs and closes the cluster, instead of each worker dying with its
+own KeyboardInterrupt traceback.
 """
 
 from __future__ import annotations
 
 import fcntl
 import os
+import signal
 import socket
 import tempfile
 import time
@@ -49,6 +55,14 @@ def ensure_warm() -> None:
         finally:
             fcntl.flock(lock.fileno(), fcntl.LOCK_UN)
     _warm.append(True)
+
+
+def dask_setup(worker: Any) -> None:
+    """Dask's preload hook, in each local worker process as it starts (module docstring):
+    SIGINT is ignored there (the study stops its workers itself)."""
+    import threading
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _one_line(text: str) -> str:

@@ -17,7 +17,12 @@ QUANTITIES = (("ee_position_error_m", "end-effector position error", 1e3, "mm"),
 
 
 def _read(path: Path) -> tuple[list[str], list[dict[str, str]]]:
-    text = path.read_text(encoding="utf-8")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as err:
+        raise ValueError(f"{path} is not a study's results table (not UTF-8 text: byte "
+                         f"{err.object[err.start]:#04x} at offset {err.start}): give the "
+                         "results.csv that 'aerial-drake study' wrote") from None
     if not text.endswith("\n"):  # a cut-short last line (an interrupted study)
         text = text[:text.rfind("\n") + 1]
     reader = csv.DictReader(text.splitlines())
@@ -56,8 +61,9 @@ def _grid_parameters(columns: list[str], rows: list[dict[str, str]]) -> list[str
 
 def write_study_plots(table: str | Path, out: str | Path,
                       formats: tuple[str, ...] = ("png", "svg")) -> list[Path]:
-    """Write the figures of ``table`` into ``out``; returns the files. ValueError for a table
-    with no rows or no error columns."""
+    """Write the figures of ``table`` into ``out``; returns the files. ValueError (before
+    any figure) for a table that is not UTF-8, has no rows, no error columns or no completed
+    run (its errors are what the figures show)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -73,6 +79,12 @@ def write_study_plots(table: str | Path, out: str | Path,
         raise ValueError(f"{path}: no per-phase error columns (phase*.ee_position_error_m.max"
                          " or phase*.com_position_error_m.max) to plot")
     done = [r for r in rows if r.get("completed") == "true"]
+    if not done:
+        reasons = sorted({r.get("failure", "")[:120] for r in rows} - {""})
+        raise ValueError(f"{path}: none of its {len(rows)} runs completed, so there is no "
+                         "error to plot; the failures (its 'failure' column) include: "
+                         f"{'; '.join(reasons[:3]) or 'none given'}. Fix the study (see "
+                         "'aerial-drake study FILE --show-run 0') and run it again")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     written: list[Path] = []
@@ -96,7 +108,8 @@ def write_study_plots(table: str | Path, out: str | Path,
                 for c in phase_columns[q]]
         ax.boxplot(data)
         ax.set_xticks(range(1, len(data) + 1), [f"phase {k}" for k in range(len(data))])
-        ax.set_yscale("log")
+        if any(x > 0 for column in data for x in column):  # (else nothing to log-scale)
+            ax.set_yscale("log")
         ax.set_ylabel(f"max {label} ({unit})")
     fig.tight_layout()
     written += _save(fig, out, "box_per_phase", formats)

@@ -49,3 +49,31 @@ def test_a_table_without_error_columns_is_refused(tmp_path):
         {"run_id": "x", "index": 0, "draw": 0, "completed": True})
     with pytest.raises(ValueError, match="no per-phase error columns"):
         dut.write_study_plots(path, tmp_path / "p")
+
+
+def test_a_table_where_every_run_failed_is_refused_before_any_figure(tmp_path):
+    rows = [{**_row(i, completed=False, **{"param.a": i}), "failure": "diverged at t = 0.1"}
+            for i in range(4)]
+    rows = [{k: ("" if k in ERRORS else v) for k, v in r.items()} for r in rows]
+    with pytest.raises(ValueError, match="none of its 4 runs completed.*diverged at t = 0.1"):
+        dut.write_study_plots(_table(tmp_path, ["param.a"], rows), tmp_path / "p")
+    assert not (tmp_path / "p").exists()
+
+
+def test_runs_whose_errors_are_all_zero_still_plot(tmp_path):
+    rows = [{**_row(i, **{"param.a": i}), **{c: 0.0 for c in ERRORS}} for i in range(3)]
+    written = dut.write_study_plots(_table(tmp_path, ["param.a"], rows), tmp_path / "p",
+                                    formats=("png",))
+    assert {p.name for p in written} == {"histograms.png", "box_per_phase.png"}
+
+
+def test_the_command_line_exits_2_on_a_failed_study_or_a_table_not_utf8(tmp_path, capsys):
+    from aerial_drake import cli
+    rows = [_row(i, completed=False, **{"param.a": i}) for i in range(2)]
+    table = _table(tmp_path, ["param.a"], rows)
+    assert cli.main(["study-plot", str(table)]) == 2
+    assert "none of its 2 runs completed" in capsys.readouterr().err
+    table.write_bytes(b"run_id,completed\n\xe9t\xe9,true\n")
+    assert cli.main(["study-plot", str(table)]) == 2
+    err = capsys.readouterr().err
+    assert str(table) in err and "not UTF-8" in err and "unexpected" not in err
