@@ -33,6 +33,7 @@ import numpy as np
 from aerial_drake.trajectories.base import ReferenceSource
 from aerial_drake.trajectories.heading import heading_and_offset
 from aerial_drake.trajectories.hermite import PiecewiseHermite, hermite_segment
+from aerial_drake.trajectories.orientation import end_effector_rotation, paper_angles_rotation
 from aerial_drake.trajectories.params import WaypointsParams
 from aerial_drake.trajectories.reference import (
     COM_REFERENCE_SIZE,
@@ -56,17 +57,6 @@ MAX_SEGMENT_ROTATION = math.pi - 0.05
 ALONG_PATH_MIN_DISTANCE = 0.01
 _C4 = 5  # value and four derivatives
 _C2 = 3  # value and two derivatives
-
-
-def paper_angles_rotation(angles) -> np.ndarray:
-    """R = R1(a) R2(b) R3(c) (RotX, RotY, RotZ) of (29) for ``angles`` = [a, b, c] (rad)."""
-    a, b, c = (float(x) for x in angles)
-    ca, sa, cb, sb, cc, sc = math.cos(a), math.sin(a), math.cos(b), math.sin(b), \
-        math.cos(c), math.sin(c)
-    R1 = np.array([[1.0, 0.0, 0.0], [0.0, ca, -sa], [0.0, sa, ca]])
-    R2 = np.array([[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]])
-    R3 = np.array([[cc, -sc, 0.0], [sc, cc, 0.0], [0.0, 0.0, 1.0]])
-    return R1 @ R2 @ R3
 
 
 def _rest_to_rest(values: np.ndarray, velocities: np.ndarray | None = None) -> np.ndarray:
@@ -135,7 +125,7 @@ class WaypointsReference(ReferenceSource):
 
     def _orientation_segments(self, points) -> tuple[np.ndarray, PiecewiseHermite]:
         """Per segment: its base R_i and the quintic r(tau) (module docstring)."""
-        rotations = [paper_angles_rotation(w.ee_rpy) for w in points]
+        rotations = [end_effector_rotation(w.ee_rpy, w.ee_orientation) for w in points]
         omegas = [np.asarray(w.ee_angular_velocity or [0.0, 0.0, 0.0], dtype=float)
                   for w in points]
         coefficients = []
