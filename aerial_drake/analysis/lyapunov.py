@@ -17,7 +17,6 @@ from aerial_drake.analysis.settings import FULL_SETTINGS
 from aerial_drake.control.law import Gains, diagnostics_slices, task_size_of_diagnostics
 from aerial_drake.simulation.scenarios import Scenario, load_scenario
 
-
 #: V(0) below this is round-off, not an error (a start within about 1e-7 m and rad of the
 #: reference): the run started on its reference and V's decrease shows nothing.
 V_ROUND_OFF = 1e-12

@@ -1,4 +1,5 @@
-"""``kind: hover``: a constant reference (the CoM at rest, the arm holding its task)."""
+"""``kind: hover``: a constant reference (the system's CoM at rest, the arm holding
+its task)."""
 
 from __future__ import annotations
 
@@ -6,9 +7,9 @@ import numpy as np
 
 from aerial_drake.trajectories.base import ReferenceSource
 from aerial_drake.trajectories.heading import heading_reference, rotated_offset
+from aerial_drake.trajectories.orientation import end_effector_rotation
 from aerial_drake.trajectories.params import HoverParams
 from aerial_drake.trajectories.reference import ReferenceSample
-from aerial_drake.trajectories.orientation import end_effector_rotation
 
 __all__ = ["HoverReference"]
 

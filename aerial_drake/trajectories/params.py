@@ -12,6 +12,9 @@ section, is :mod:`aerial_drake.trajectories.kinds`):
 - ``python``: a function of the user's, or Drake trajectories (:class:`PythonParams`,
   :mod:`.python_kind`).
 
+"CoM" here is always the whole system's centre of mass (vehicle, arm and payload: x_g of (3),
+what x_d tracks), never the vehicle's alone.
+
 ``joint_targets`` (the task's joint components' angles) and ``com_offset`` (r_o of (33)) are
 shared: the paper and hover kinds and waypoints' ``com: offset`` rule read them.
 
@@ -252,7 +255,7 @@ class TrajectoryParams:
     heading_initial: float = 0.0
     # Heading rate w_h, phi4 = phi4_0 + w_h t (rad/s); either sign.
     heading_rate: float = 0.5
-    # Offset r_o from x_c to the desired CoM, rotated by R3(phi4), [x, y, z] (m).
+    # Offset r_o from x_c to the desired CoM (the system's), rotated by R3(phi4), [x, y, z] (m).
     com_offset: typing.List[float] = dataclasses.field(default_factory=lambda: [-0.3, 0.0, 0.6])
 
     # The other kinds' sections (read only by their kind).

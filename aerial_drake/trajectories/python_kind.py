@@ -3,13 +3,13 @@
 ``trajectory.python.function: "module:name"`` names one of:
 
 - a function ``f(t) -> ReferenceSample`` giving the reference and every derivative the law
-  reads at time t (x_d, the system's CoM, to the 4th, p_ed, R_ed as w_ed, dw_ed, and q_jd to the 2nd, b1d to the
-  2nd: :class:`~aerial_drake.trajectories.reference.ReferenceSample`);
+  reads at time t (x_d, the system's CoM, to the 4th, p_ed, R_ed as w_ed, dw_ed, and q_jd
+  to the 2nd, b1d to the 2nd: :class:`~aerial_drake.trajectories.reference.ReferenceSample`);
 - a dict of Drake ``Trajectory`` objects (their derivatives from ``EvalDerivative``):
-  ``com`` (3 rows, required: the system's CoM x_d), ``ee_position`` (3 rows, required), ``ee_rotation_vector``
-  (3 rows: R_ed = exp(hat(r(t))), :mod:`.so3`; default identity), ``heading`` (1 row, phi4;
-  default 0), ``joints`` (one row per joint component of the task; default the joint
-  targets);
+  ``com`` (3 rows, required: the system's CoM x_d), ``ee_position`` (3 rows, required),
+  ``ee_rotation_vector`` (3 rows: R_ed = exp(hat(r(t))), :mod:`.so3`; default identity),
+  ``heading`` (1 row, phi4; default 0), ``joints`` (one row per joint component of the task;
+  default the joint targets);
 - a function of no arguments returning either (called once, at load).
 
 The reference is evaluated once at load (shapes and finiteness, with errors naming the

@@ -7,9 +7,9 @@ Constructions (all local: a waypoint changes only its two segments):
   degree-9 Hermite polynomials (:mod:`.hermite`), matching at each waypoint the value, the
   given velocity (zero: rest to rest) and zero acceleration, jerk and snap. So every one is C^4
   (the law needs x_d in C^4 for the attitude feed-forward (13)-(16), the task in C^2 (17)-(20)).
-- CoM with ``com: offset``: the paper's rule (33), x_d = p_ed + R3(phi4) r_o, the end
-  effector's path at the fixed offset r_o (``trajectory.com_offset``) rotated with the heading:
-  C^4 because both terms are.
+- the system's CoM (x_g of (3)) with ``com: offset``: the paper's rule (33),
+  x_d = p_ed + R3(phi4) r_o, the end effector's path at the fixed offset r_o
+  (``trajectory.com_offset``) rotated with the heading: C^4 because both terms are.
 - orientation: on each segment R(t) = R_i exp(hat(r(t))) with r(t) a quintic in the tangent
   space at R_i (:mod:`.so3`) from r = 0 to log(R_i^T R_{i+1}), matching the waypoints' angular
   velocities (zero: rest) and zero angular acceleration at both ends. The angular velocity

@@ -149,8 +149,8 @@ def test_lyapunov_function_decreases_without_disturbances():
 
 
 def test_a_run_started_on_its_reference_is_reported_as_round_off():
-    """No initial offset from a reference at rest: V(0) is round-off (about 1e-28), and the report says the check shows
-    nothing instead of judging V's rises of 1e-30 (issue 27)."""
+    """No initial offset from a reference at rest: V(0) is round-off (about 1e-28), and the
+    report says the check shows nothing instead of judging V's rises of 1e-30 (issue 27)."""
     nominal = load_scenario("nominal")
     hover = dataclasses.replace(nominal.trajectory, kind="hover")  # at rest: starts on it
     base = dataclasses.replace(nominal, trajectory=hover, initial=dataclasses.replace(
