@@ -17,6 +17,10 @@ from aerial_drake.analysis.settings import FULL_SETTINGS
 from aerial_drake.control.law import Gains, diagnostics_slices, task_size_of_diagnostics
 from aerial_drake.simulation.scenarios import Scenario, load_scenario
 
+#: V(0) below this is round-off, not an error (a start within about 1e-7 m and rad of the
+#: reference): the run started on its reference and V's decrease shows nothing.
+V_ROUND_OFF = 1e-12
+
 
 # --- Lyapunov function along trajectories ---------------------------------------------------
 def lee_conditions(gains: Gains, m: float, *, accel_bound: float, psi1: float = 0.05,
@@ -118,12 +122,15 @@ class LyapunovResult:
                               "max_step_size_s": sim.max_step_size},
                "gamma1": self.scenario.gains.lyapunov_gamma1,
                "gamma2": self.scenario.gains.lyapunov_gamma2,
-               "wall_time_s": self.wall_time_s}
+               "wall_time_s": self.wall_time_s,
+               # V(0) is round-off (V_ROUND_OFF): the run started on its reference.
+               "started_on_reference": bool(len(self.V) and abs(float(self.V[0])) < V_ROUND_OFF)}
         for name in ("V", "V1", "V_task"):
             x = getattr(self, name)
             rise = self.max_increase(x)
             out[name] = {"initial": float(x[0]), "final": float(x[-1]), "max_increase": rise,
-                         "max_increase_relative": rise / float(x[0]) if x[0] > 0 else math.nan}
+                         "max_increase_relative": rise / float(x[0])
+                         if x[0] > 0 and not out["started_on_reference"] else math.nan}
         return out
 
 

@@ -21,7 +21,12 @@ from aerial_drake.analysis.figures import (
     figure_region_of_attraction,
 )
 from aerial_drake.analysis.linearization import linearize_closed_loop
-from aerial_drake.analysis.lyapunov import lee_conditions, lyapunov_study, trajectory_accel_bound
+from aerial_drake.analysis.lyapunov import (
+    V_ROUND_OFF,
+    lee_conditions,
+    lyapunov_study,
+    trajectory_accel_bound,
+)
 from aerial_drake.analysis.region_of_attraction import region_of_attraction
 from aerial_drake.analysis.settings import FULL_SETTINGS, AnalysisSettings
 from aerial_drake.simulation.outputs import strict_json, write_text_atomically
@@ -176,17 +181,26 @@ def format_report(report: dict) -> str:
         lines += ["  " + line for line in format_eigenvalue_table(cl["eigenvalues"]).split("\n")]
         lines += ["  " + line for line in format_open_loop(ol)]
     lines += format_lee(report["lee_conditions"])
-    ly = report["lyapunov"]
-    lines.append(f"Lyapunov ({ly['duration_s']:g} s, {ly['integrator']['scheme']} accuracy "
-                 f"{ly['integrator']['accuracy']:g}): V {ly['V']['initial']:.4g} -> "
-                 f"{ly['V']['final']:.4g}, largest increase between samples "
-                 f"{ly['V']['max_increase']:.2e}; V_task's {ly['V_task']['max_increase']:.2e} ("
-                 + ("V never increased along the run"
-                    if ly['V']['max_increase'] <= 0 else "V increased somewhere: see lyapunov.png")
-                 + ")")
+    lines.append(format_lyapunov(report["lyapunov"]))
     roa = report["region_of_attraction"]
     lines.append("region of attraction: fraction of sampled starts that converged ("
                  + roa["criterion"] + "), per size s of the initial offsets: " + ", ".join(
                      f"s = {s:g}: {f:.2f}"
                      for s, f in zip(roa["scales"], roa["converged_fraction"])))
     return "\n".join(lines)
+
+
+def format_lyapunov(ly: dict) -> str:
+    """The Lyapunov line of the report from :meth:`LyapunovResult.summary`: a run started on
+    its reference (V(0) round-off) is said to show nothing, not to decrease or increase."""
+    head = (f"Lyapunov ({ly['duration_s']:g} s, {ly['integrator']['scheme']} accuracy "
+            f"{ly['integrator']['accuracy']:g}): V {ly['V']['initial']:.4g} -> "
+            f"{ly['V']['final']:.4g}")
+    if ly.get("started_on_reference"):
+        return (head + f": round-off (V(0) < {V_ROUND_OFF:g}): the run started on its "
+                "reference, so V's decrease shows nothing. Give the scenario an initial offset "
+                "(initial.base_position_offset, base_rpy_offset) to test it")
+    return (head + f", largest increase between samples {ly['V']['max_increase']:.2e}; "
+            f"V_task's {ly['V_task']['max_increase']:.2e} ("
+            + ("V never increased along the run" if ly['V']['max_increase'] <= 0
+               else "V increased somewhere: see lyapunov.png") + ")")

@@ -108,7 +108,8 @@ class RobotDescription:
     # rotor_inertia times gear_ratio squared).
     reflected_inertia: list[float] = field(default_factory=list)
     # How far (m) the desired end effector may stray from its nominal offset to the desired
-    # CoM (heading frame) before a scenario's reference is refused as out of the arm's reach.
+    # CoM (the system's; heading frame) before a scenario's reference is refused as out of
+    # the arm's reach.
     workspace_radius: float = 0.2
     # Other plants to simulate (each a name and its model files).
     variants: list[PlantVariant] = field(default_factory=list)

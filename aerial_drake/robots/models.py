@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from pydrake.geometry import SceneGraph
-from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
+from pydrake.math import RigidTransform, RotationMatrix
 from pydrake.multibody.parsing import ModelDirectives
 from pydrake.multibody.plant import (
     AddMultibodyPlant,
@@ -61,6 +61,7 @@ from aerial_drake.robots.structure import (
     check_structure,
     check_task,
     end_effector_frame,
+    end_effector_mount,
     find_body,
 )
 from aerial_drake.robots.task import TaskLayout
@@ -300,11 +301,9 @@ def add_aerial_manipulator(
         # Must precede Finalize, which would otherwise give the body a quaternion joint.
         plant.AddJoint(RpyFloatingJoint("base", plant.world_frame(), base_body.body_frame()))
     frame = end_effector_frame(plant, robot)
-    if not robot.end_effector.frame:
-        ee = robot.end_effector
-        X_BE = RigidTransform(RollPitchYaw(ee.offset_rpy), np.asarray(ee.offset_xyz, float))
-        frame = plant.AddFrame(FixedOffsetFrame(
-            END_EFFECTOR_FRAME, structure.end_effector_body.body_frame(), X_BE))
+    body, X_BE = end_effector_mount(plant, robot)
+    if not robot.end_effector.frame or frame.body().index() != body.index():  # (the massless)
+        frame = plant.AddFrame(FixedOffsetFrame(END_EFFECTOR_FRAME, body.body_frame(), X_BE))
     world = () if environment is None else add_environment(
         plant, environment, environment_packages, robot=own)
     task = None

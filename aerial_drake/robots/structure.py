@@ -8,6 +8,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numpy as np
+from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import Frame, Joint, JointActuator, ModelInstanceIndex, RigidBody
 
@@ -50,8 +52,47 @@ def end_effector_frame(plant: MultibodyPlant, robot: RobotDescription) -> Frame:
             continue
         if plant.HasFrameNamed(name, instance):
             return plant.GetFrameByName(name, instance)
+    frames = [f"{plant.GetModelInstanceName(ModelInstanceIndex(m))}::{f.name()}"
+              for m in range(1, plant.num_model_instances())  # 0: World's
+              for f in map(plant.get_frame, plant.GetFrameIndices(ModelInstanceIndex(m)))
+              if not f.name().startswith("__")]
     raise RobotDescriptionError(f"{robot.source}: end_effector.frame: no frame '{ee.frame}' "
-                                "in the model files", "end_effector.frame")
+                                f"in the model files; frames: {', '.join(frames)}",
+                                "end_effector.frame")
+
+
+def end_effector_mount(plant: MultibodyPlant, robot: RobotDescription
+                       ) -> tuple[RigidBody, RigidTransform]:
+    """The body with mass the end effector E is fixed to, and E's pose in it X_BE: the named
+    frame's pose in its body (or, for ``body``, the description's offsets), carried up through
+    weld joints past massless bodies (the common URDF ``tool0``/``ee`` link on a fixed joint):
+    the law's kinematics (:mod:`aerial_drake.dynamics.decoupling`) keep bodies with mass only.
+    RobotDescriptionError if E is on a massless body that moves."""
+    ee = robot.end_effector
+    frame = end_effector_frame(plant, robot)
+    field = "end_effector.frame" if ee.frame else "end_effector.body"
+    if ee.frame:
+        X_BE = frame.GetFixedPoseInBodyFrame()
+    else:
+        X_BE = RigidTransform(RollPitchYaw(ee.offset_rpy), np.asarray(ee.offset_xyz, float))
+    body = frame.body()
+    inboard = {j.child_body().index(): j for j in _all_joints(plant)}
+    while not body.default_mass() > 0.0:
+        joint = inboard.get(body.index())
+        if joint is None or joint.type_name() != "weld":
+            how = "is free" if joint is None else f"moves on the {joint.type_name()} joint " \
+                f"'{joint.name()}'"
+            raise RobotDescriptionError(
+                f"{robot.source}: {field}: '{ee.frame or ee.body}' is on the massless body "
+                f"'{body.name()}', which {how}: the law follows bodies with mass. Give that "
+                "body a mass, or put the end effector on a body with mass (or on a massless "
+                "link welded to one)", field)
+        # X_PE = X_PF X_FM X_MC X_CE: parent frame, the weld, the child body's frame.
+        X_CE = X_BE
+        X_BE = (joint.frame_on_parent().GetFixedPoseInBodyFrame() @ joint.X_FM()
+                @ joint.frame_on_child().GetFixedPoseInBodyFrame().inverse() @ X_CE)
+        body = joint.parent_body()
+    return body, X_BE
 
 
 def _all_body_indices(plant: MultibodyPlant) -> list:
@@ -149,7 +190,7 @@ def check_structure(plant: MultibodyPlant, robot: RobotDescription, variant: str
                 f"{src}: joint '{j.name()}' has no actuator: every arm joint needs one (the "
                 "arm is fully actuated, tau of (1)). Add a transmission/actuator to it",
                 "arm_joints")
-    ee = end_effector_frame(plant, robot).body()
+    ee = end_effector_mount(plant, robot)[0]
     # The chain: the joints from the end effector's body up to the vehicle.
     path: list[Joint] = []
     body = ee.index()

@@ -172,10 +172,10 @@ def _check_reach(model: AerialManipulator, ref: ReferenceSample, times: np.ndarr
         raise ScenarioError(
             f"trajectory: the desired end effector leaves the arm's workspace at t = "
             f"{times[worst]:.2f} s: it is {dev[worst]:.3f} m from its nominal offset "
-            f"{np.round(nominal, 3).tolist()} m to the desired CoM (heading frame; limit "
-            f"{radius} m, the robot's workspace_radius). Keep the end-effector reference near "
-            "that offset from the CoM reference: trajectory.com_offset near the nominal "
-            "offset (the paper and waypoints kinds' rule (33)), a smaller "
+            f"{np.round(nominal, 3).tolist()} m to the desired CoM (the system's; heading "
+            f"frame; limit {radius} m, the robot's workspace_radius). Keep the end-effector "
+            "reference near that offset from the CoM reference: trajectory.com_offset near "
+            "the nominal offset (the paper and waypoints kinds' rule (33)), a smaller "
             "trajectory.agile_amplitude (paper kind), or CoM waypoints closer to the end "
             "effector's.", "trajectory")
 

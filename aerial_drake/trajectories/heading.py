@@ -1,5 +1,5 @@
-"""The heading angle phi4(t) as the law reads it: b1d and its derivatives (13), and the CoM
-offset R3(phi4) r_o of (33) with its derivatives up to the 4th (x_d needs C^4).
+"""The heading angle phi4(t) as the law reads it: b1d and its derivatives (13), and the system's
+CoM offset R3(phi4) r_o of (33) with its derivatives up to the 4th (x_d needs C^4).
 
 Both come from z(t) = exp(i phi4(t)) (b1d's xy part), whose derivatives follow from phi4's
 by the chain rule (Faa di Bruno up to the 4th order).

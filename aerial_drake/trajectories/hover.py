@@ -1,4 +1,5 @@
-"""``kind: hover``: a constant reference (the CoM at rest, the arm holding its task)."""
+"""``kind: hover``: a constant reference (the system's CoM at rest, the arm holding
+its task)."""
 
 from __future__ import annotations
 
@@ -6,9 +7,9 @@ import numpy as np
 
 from aerial_drake.trajectories.base import ReferenceSource
 from aerial_drake.trajectories.heading import heading_reference, rotated_offset
+from aerial_drake.trajectories.orientation import end_effector_rotation
 from aerial_drake.trajectories.params import HoverParams
 from aerial_drake.trajectories.reference import ReferenceSample
-from aerial_drake.trajectories.waypoints import paper_angles_rotation
 
 __all__ = ["HoverReference"]
 
@@ -32,7 +33,7 @@ class HoverReference(ReferenceSource):
         empty = np.zeros_like(joint_targets)
         sample = ReferenceSample(
             com=com, p_ed=p, v_ed=zero, a_ed=zero,
-            R_ed=paper_angles_rotation(params.ee_rpy), w_ed=zero, dw_ed=zero,
+            R_ed=end_effector_rotation(params.ee_rpy, params.ee_orientation), w_ed=zero, dw_ed=zero,
             q_jd=joint_targets, q_jd_dot=empty, q_jd_ddot=empty,
             b1d=heading_reference(phi))
         self._packed = np.concatenate(sample.to_vectors())

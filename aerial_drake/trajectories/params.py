@@ -12,6 +12,9 @@ section, is :mod:`aerial_drake.trajectories.kinds`):
 - ``python``: a function of the user's, or Drake trajectories (:class:`PythonParams`,
   :mod:`.python_kind`).
 
+"CoM" here is always the whole system's centre of mass (vehicle, arm and payload: x_g of (3),
+what x_d tracks), never the vehicle's alone.
+
 ``joint_targets`` (the task's joint components' angles) and ``com_offset`` (r_o of (33)) are
 shared: the paper and hover kinds and waypoints' ``com: offset`` rule read them.
 
@@ -24,6 +27,8 @@ import math
 import typing
 
 import numpy as np
+
+from aerial_drake.trajectories.orientation import EeOrientation, orientation_errors
 
 __all__ = ["TrajectoryParams", "HoverParams", "Waypoint", "WaypointsParams",
            "PythonParams", "COM_RULES", "HEADING_RULES"]
@@ -59,11 +64,16 @@ class HoverParams:
     # The end effector's position, World [x, y, z] (m).
     ee_position: typing.List[float] = dataclasses.field(
         default_factory=lambda: [0.6, 0.0, 0.8])
-    # Its orientation R_ed = R1(a) R2(b) R3(c) as in (29): [a, b, c] (rad).
+    # Its orientation R_ed = R1(a) R2(b) R3(c) = Rx(a) Ry(b) Rz(c), the paper's (29) (not
+    # Drake's RollPitchYaw): [a, b, c] (rad). ee_orientation names the convention instead.
     ee_rpy: typing.List[float] = dataclasses.field(default_factory=lambda: [0.0, 0.0, 0.0])
+    # The orientation in an explicit convention (one of rpy_paper, rpy_drake, quaternion);
+    # empty: ee_rpy.
+    ee_orientation: EeOrientation = dataclasses.field(default_factory=EeOrientation)
     # The vehicle's heading phi4, b1d = [cos phi4, sin phi4, 0] (rad).
     heading: float = 0.0
-    # The CoM, World [x, y, z] (m); empty: rule (33), ee_position + R3(heading) com_offset.
+    # The system's CoM (vehicle, arm and payload; x_g of (3)), World [x, y, z] (m); empty:
+    # rule (33), ee_position + R3(heading) com_offset.
     com: typing.List[float] = dataclasses.field(default_factory=list)
 
     def errors(self, n_joints: int | None = None, prefix: str = "hover.") -> list[str]:
@@ -71,6 +81,7 @@ class HoverParams:
         signature)."""
         found = [_vector_error(prefix + "ee_position", self.ee_position, 3, "[x, y, z] in m"),
                  _vector_error(prefix + "ee_rpy", self.ee_rpy, 3, "[a, b, c] in rad")]
+        found += orientation_errors(prefix, self.ee_rpy, self.ee_orientation)
         if self.com:
             found.append(_vector_error(prefix + "com", self.com, 3, "[x, y, z] in m"))
         if not _is_finite_number(self.heading):
@@ -88,11 +99,16 @@ class Waypoint:
     # End-effector position, World [x, y, z] (m).
     ee_position: typing.List[float] = dataclasses.field(
         default_factory=lambda: [0.6, 0.0, 0.8])
-    # End-effector orientation R_ed = R1(a) R2(b) R3(c) as in (29): [a, b, c] (rad).
+    # End-effector orientation R_ed = R1(a) R2(b) R3(c) = Rx(a) Ry(b) Rz(c), the paper's (29)
+    # (not Drake's RollPitchYaw): [a, b, c] (rad). ee_orientation names the convention instead.
     ee_rpy: typing.List[float] = dataclasses.field(default_factory=lambda: [0.0, 0.0, 0.0])
+    # The orientation in an explicit convention (rpy_paper, rpy_drake or quaternion); empty:
+    # ee_rpy.
+    ee_orientation: EeOrientation = dataclasses.field(default_factory=EeOrientation)
     # The task's joint components' angles (rad); empty: joint_targets (or the nominal).
     joints: typing.List[float] = dataclasses.field(default_factory=list)
-    # The CoM, World [x, y, z] (m): required with ``com: waypoints``, else empty.
+    # The system's CoM (x_g of (3)), World [x, y, z] (m): required with ``com: waypoints``,
+    # else empty.
     com: typing.List[float] = dataclasses.field(default_factory=list)
     # The heading phi4 (rad): required with ``heading: given``, else .nan.
     heading: float = math.nan
@@ -144,6 +160,7 @@ class WaypointsParams:
             found.append(_vector_error(where + "ee_position", w.ee_position, 3,
                                        "[x, y, z] in m"))
             found.append(_vector_error(where + "ee_rpy", w.ee_rpy, 3, "[a, b, c] in rad"))
+            found += orientation_errors(where, w.ee_rpy, w.ee_orientation)
             if w.joints and n_joints is not None:
                 found.append(_vector_error(where + "joints", w.joints, n_joints,
                                            "one angle per joint component of the task (rad)"))
@@ -238,7 +255,7 @@ class TrajectoryParams:
     heading_initial: float = 0.0
     # Heading rate w_h, phi4 = phi4_0 + w_h t (rad/s); either sign.
     heading_rate: float = 0.5
-    # Offset r_o from x_c to the desired CoM, rotated by R3(phi4), [x, y, z] (m).
+    # Offset r_o from x_c to the desired CoM (the system's), rotated by R3(phi4), [x, y, z] (m).
     com_offset: typing.List[float] = dataclasses.field(default_factory=lambda: [-0.3, 0.0, 0.6])
 
     # The other kinds' sections (read only by their kind).

@@ -3,18 +3,21 @@
 ``trajectory.python.function: "module:name"`` names one of:
 
 - a function ``f(t) -> ReferenceSample`` giving the reference and every derivative the law
-  reads at time t (x_d to the 4th, p_ed, R_ed as w_ed, dw_ed, and q_jd to the 2nd, b1d to the
-  2nd: :class:`~aerial_drake.trajectories.reference.ReferenceSample`);
+  reads at time t (x_d, the system's CoM, to the 4th, p_ed, R_ed as w_ed, dw_ed, and q_jd
+  to the 2nd, b1d to the 2nd: :class:`~aerial_drake.trajectories.reference.ReferenceSample`);
 - a dict of Drake ``Trajectory`` objects (their derivatives from ``EvalDerivative``):
-  ``com`` (3 rows, required), ``ee_position`` (3 rows, required), ``ee_rotation_vector``
-  (3 rows: R_ed = exp(hat(r(t))), :mod:`.so3`; default identity), ``heading`` (1 row, phi4;
-  default 0), ``joints`` (one row per joint component of the task; default the joint
-  targets);
+  ``com`` (3 rows, required: the system's CoM x_d), ``ee_position`` (3 rows, required),
+  ``ee_rotation_vector`` (3 rows: R_ed = exp(hat(r(t))), :mod:`.so3`; default identity),
+  ``heading`` (1 row, phi4; default 0), ``joints`` (one row per joint component of the task;
+  default the joint targets);
 - a function of no arguments returning either (called once, at load).
 
 The reference is evaluated once at load (shapes and finiteness, with errors naming the
 field); the scenario's checks then test its derivatives numerically over the whole run
-(:mod:`aerial_drake.trajectories.continuity`) before anything is simulated.
+(:mod:`aerial_drake.trajectories.continuity`) before anything is simulated. Whatever the
+user's code raises at load (importing the module, the call of no arguments, f(0)) is a
+ValueError naming ``python.function`` and the error; code that runs past
+:data:`LOAD_TIME_LIMIT` there is stopped (:mod:`.time_limit`) with the same.
 """
 
 from __future__ import annotations
@@ -32,9 +35,14 @@ from aerial_drake.trajectories.heading import heading_reference
 from aerial_drake.trajectories.params import PythonParams
 from aerial_drake.trajectories.reference import ReferenceSample
 from aerial_drake.trajectories.so3 import exp_so3, rotation_vector_rates
+from aerial_drake.trajectories.time_limit import TimeLimitExceeded, time_limit
 
 __all__ = ["PythonReference", "DrakeTrajectoriesReference", "resolve_python_reference",
-           "TRAJECTORY_KEYS"]
+           "TRAJECTORY_KEYS", "LOAD_TIME_LIMIT"]
+
+#: The time the user's code may take at load: importing its module, the call of no
+#: arguments and the evaluation at t = 0, together (s).
+LOAD_TIME_LIMIT = 10.0
 
 #: The keys of a dict of Drake trajectories, and the rows each must have (None: n_j).
 TRAJECTORY_KEYS: dict[str, int | None] = {
@@ -67,7 +75,12 @@ def resolve_python_reference(params: PythonParams) -> Any:
                          f"{module_name!r} has no {name!r}")
     target = getattr(module, name)
     if callable(target) and not isinstance(target, dict) and _parameters(target) == 0:
-        target = target()
+        try:
+            target = target()
+        except Exception as err:  # the user's function: any error, named
+            raise ValueError(f"Invalid python: 'python.function' {params.function!r} (a "
+                             f"function of no arguments) raised {type(err).__name__}: {err}"
+                             ) from None
     return target
 
 
@@ -79,7 +92,19 @@ def _parameters(function: Callable) -> int | None:
 
 
 def python_reference(params: PythonParams, joint_targets: np.ndarray) -> ReferenceSource:
-    """The reference source ``params`` names (module docstring), evaluated once at t = 0."""
+    """The reference source ``params`` names (module docstring), evaluated once at t = 0,
+    within :data:`LOAD_TIME_LIMIT`."""
+    try:
+        with time_limit(LOAD_TIME_LIMIT, f"python.function {params.function!r}"):
+            return _load(params, joint_targets)
+    except TimeLimitExceeded:
+        raise ValueError(f"Invalid python: 'python.function' {params.function!r} did not "
+                         f"return within {LOAD_TIME_LIMIT:g} s at load (importing its module "
+                         "and evaluating it at t = 0): a loop that never ends? Make f(t) "
+                         "return promptly (it is called thousands of times per run)") from None
+
+
+def _load(params: PythonParams, joint_targets: np.ndarray) -> ReferenceSource:
     target = resolve_python_reference(params)
     joint_targets = np.asarray(joint_targets, dtype=float)
     source: ReferenceSource
@@ -93,9 +118,12 @@ def python_reference(params: PythonParams, joint_targets: np.ndarray) -> Referen
                          "or a dict of Drake trajectories (docs/trajectories.md)")
     try:
         source.evaluate(0.0)
-    except ValueError as err:
+    except ValueError as err:  # a wrong shape (named by fill), or the user's own ValueError
         raise ValueError(f"Invalid python: 'python.function' {params.function!r} at t = 0: "
                          f"{err}") from None
+    except Exception as err:  # the user's function: whatever it raises, named
+        raise ValueError(f"Invalid python: 'python.function' {params.function!r} raised "
+                         f"{type(err).__name__} at t = 0: {err}") from None
     return source
 
 

@@ -7,9 +7,9 @@ Constructions (all local: a waypoint changes only its two segments):
   degree-9 Hermite polynomials (:mod:`.hermite`), matching at each waypoint the value, the
   given velocity (zero: rest to rest) and zero acceleration, jerk and snap. So every one is C^4
   (the law needs x_d in C^4 for the attitude feed-forward (13)-(16), the task in C^2 (17)-(20)).
-- CoM with ``com: offset``: the paper's rule (33), x_d = p_ed + R3(phi4) r_o, the end
-  effector's path at the fixed offset r_o (``trajectory.com_offset``) rotated with the heading:
-  C^4 because both terms are.
+- the system's CoM (x_g of (3)) with ``com: offset``: the paper's rule (33),
+  x_d = p_ed + R3(phi4) r_o, the end effector's path at the fixed offset r_o
+  (``trajectory.com_offset``) rotated with the heading: C^4 because both terms are.
 - orientation: on each segment R(t) = R_i exp(hat(r(t))) with r(t) a quintic in the tangent
   space at R_i (:mod:`.so3`) from r = 0 to log(R_i^T R_{i+1}), matching the waypoints' angular
   velocities (zero: rest) and zero angular acceleration at both ends. The angular velocity
@@ -33,6 +33,7 @@ import numpy as np
 from aerial_drake.trajectories.base import ReferenceSource
 from aerial_drake.trajectories.heading import heading_and_offset
 from aerial_drake.trajectories.hermite import PiecewiseHermite, hermite_segment
+from aerial_drake.trajectories.orientation import end_effector_rotation, paper_angles_rotation
 from aerial_drake.trajectories.params import WaypointsParams
 from aerial_drake.trajectories.reference import (
     COM_REFERENCE_SIZE,
@@ -56,17 +57,6 @@ MAX_SEGMENT_ROTATION = math.pi - 0.05
 ALONG_PATH_MIN_DISTANCE = 0.01
 _C4 = 5  # value and four derivatives
 _C2 = 3  # value and two derivatives
-
-
-def paper_angles_rotation(angles) -> np.ndarray:
-    """R = R1(a) R2(b) R3(c) (RotX, RotY, RotZ) of (29) for ``angles`` = [a, b, c] (rad)."""
-    a, b, c = (float(x) for x in angles)
-    ca, sa, cb, sb, cc, sc = math.cos(a), math.sin(a), math.cos(b), math.sin(b), \
-        math.cos(c), math.sin(c)
-    R1 = np.array([[1.0, 0.0, 0.0], [0.0, ca, -sa], [0.0, sa, ca]])
-    R2 = np.array([[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]])
-    R3 = np.array([[cc, -sc, 0.0], [sc, cc, 0.0], [0.0, 0.0, 1.0]])
-    return R1 @ R2 @ R3
 
 
 def _rest_to_rest(values: np.ndarray, velocities: np.ndarray | None = None) -> np.ndarray:
@@ -135,7 +125,7 @@ class WaypointsReference(ReferenceSource):
 
     def _orientation_segments(self, points) -> tuple[np.ndarray, PiecewiseHermite]:
         """Per segment: its base R_i and the quintic r(tau) (module docstring)."""
-        rotations = [paper_angles_rotation(w.ee_rpy) for w in points]
+        rotations = [end_effector_rotation(w.ee_rpy, w.ee_orientation) for w in points]
         omegas = [np.asarray(w.ee_angular_velocity or [0.0, 0.0, 0.0], dtype=float)
                   for w in points]
         coefficients = []

@@ -4,6 +4,7 @@ and the AutoDiffXd controller it all rests on."""
 
 import dataclasses
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -11,6 +12,7 @@ import pytest
 from pydrake.autodiffutils import AutoDiffXd, ExtractGradient, ExtractValue, InitializeAutoDiff
 
 from aerial_drake import analysis as dut
+from aerial_drake.analysis.report import format_lyapunov
 from aerial_drake.control.controller import DecoupledController_, make_controller
 from aerial_drake.dynamics.equilibrium import UnreachablePose
 from aerial_drake.robots.description import shipped_robots
@@ -142,6 +144,24 @@ def test_lyapunov_function_decreases_without_disturbances():
         assert x[-1] < 0.7 * x[0]
         assert s[name]["max_increase"] <= 1e-9 * x[0], name
     np.testing.assert_allclose(result.V, result.V1 + result.V_task, rtol=1e-12)
+    assert s["started_on_reference"] is False
+    assert "V never increased along the run" in format_lyapunov(s)
+
+
+def test_a_run_started_on_its_reference_is_reported_as_round_off():
+    """No initial offset from a reference at rest: V(0) is round-off (about 1e-28), and the
+    report says the check shows nothing instead of judging V's rises of 1e-30 (issue 27)."""
+    nominal = load_scenario("nominal")
+    hover = dataclasses.replace(nominal.trajectory, kind="hover")  # at rest: starts on it
+    base = dataclasses.replace(nominal, trajectory=hover, initial=dataclasses.replace(
+        nominal.initial, base_position_offset=[0.0, 0.0, 0.0],
+        base_rpy_offset=[0.0, 0.0, 0.0], arm_offset=[]))
+    s = dut.lyapunov_study(base, duration=0.05, accuracy=1e-8).summary()
+    assert s["started_on_reference"] is True and s["V"]["initial"] < 1e-20
+    assert math.isnan(s["V"]["max_increase_relative"])
+    line = format_lyapunov(s)
+    assert "round-off" in line and "started on its reference" in line
+    assert "initial.base_position_offset" in line and "never increased" not in line
 
 
 def test_region_of_attraction_small_offsets_converge():

@@ -210,3 +210,29 @@ def test_a_fast_but_smooth_feature_is_not_a_discontinuity(paper_model):
     cut = Patched(scenario, paper_model, lambda t, ref: step_in_snap(t, bump(t, ref)))
     found = find_discontinuity(cut.sample, times)
     assert found is not None and found.signal == "x_d''''"
+
+
+@pytest.mark.parametrize("heading", [0.7, -2.3])
+def test_the_reach_check_reads_the_offset_in_the_heading_frame(tmp_path, heading):
+    """A robot whose nominal end-effector offset has a sideways part (its roll joint at 0.3
+    rad), held at that offset plus 40 mm, rotated with a heading that is not 0: the check
+    finds 40 mm, whatever the heading (a wrong sign or a transposed R3 does not: issue 27)."""
+    from aerial_drake.robots.description import load_robot_description
+    from aerial_drake.robots.models import make_plant, nominal_end_effector_offset
+    from aerial_drake.trajectories.params import HoverParams, TrajectoryParams
+    from own_robot import write_robot
+
+    description, _ = write_robot(tmp_path, posture="[0.3, 0.8, -0.8, 0.0]")
+    model = make_plant(robot=load_robot_description(description))
+    nominal = nominal_end_effector_offset(model)
+    assert abs(nominal[1]) > 0.05 and abs(nominal[0]) > 0.05  # sideways and forward parts
+    delta = np.array([0.02, -0.03, 0.0])  # 36 mm, in the heading frame
+    # Rule (33): the CoM is ee_position + R3(heading) com_offset, so the offset of E from the
+    # CoM in the heading frame is -com_offset.
+    params = TrajectoryParams(kind="hover", joint_targets=[0.0], com_offset=list(
+        -(nominal + delta)), hover=HoverParams(ee_position=[0.3, -0.2, 1.0], heading=heading))
+    reference = reference_of(params, None)
+    scenario = load_scenario("nominal")
+    dut.check_workspace(scenario, model, radius=0.037, reference=reference)
+    with pytest.raises(ScenarioError, match=r"it is 0\.036 m from its nominal offset"):
+        dut.check_workspace(scenario, model, radius=0.035, reference=reference)

@@ -157,3 +157,40 @@ def test_a_misspelt_key_in_a_section_is_named(tmp_path):
     path.write_text(shipped_scenarios()["nominal"].read_text() + "\nwind:\n  enabeld: true\n")
     with pytest.raises(ScenarioError, match="wind.enabeld"):
         load_scenario(path)
+
+
+def test_payload_offset_is_from_the_end_effector_frame_not_its_bodys_origin(tmp_path):
+    """A robot whose end-effector frame is 6 cm and a rotation away from its body's origin
+    (both shipped robots have it at the origin): the payload's mass sits at X_BE @ offset,
+    its inertia turned with R_BE (issue 27)."""
+    from pydrake.math import RigidTransform, RollPitchYaw
+
+    from aerial_drake.robots.description import load_robot_description
+    from aerial_drake.robots.models import make_plant
+    from aerial_drake.simulation.scenarios.perturbations import Payload
+    from own_robot import write_robot
+
+    description, _ = write_robot(tmp_path)
+    text = description.read_text().replace("offset_xyz: [0, 0, -0.06]",
+                                           "offset_xyz: [0.01, 0.02, -0.06], "
+                                           "offset_rpy: [0.3, -0.2, 0.5]")
+    description.write_text(text)
+    model = make_plant(robot=load_robot_description(description))
+    X_BE = model.end_effector_frame.GetFixedPoseInBodyFrame()
+    assert np.linalg.norm(X_BE.translation()) > 0.05
+    payload = Payload(mass=0.7, inertia=[1e-3, 2e-3, 3e-3], offset=[0.02, -0.01, 0.05])
+    # The inertia alone: its CoM at X_BE @ offset in the body, its central inertia R I R^T.
+    X = RigidTransform(RollPitchYaw(0.3, -0.2, 0.5), [0.01, 0.02, -0.06])
+    M = dut.payload_inertia(payload, X)
+    np.testing.assert_allclose(M.get_com(), X @ np.array(payload.offset), atol=1e-15)
+    R = X.rotation().matrix()
+    central = M.Shift(M.get_com()).CalcRotationalInertia().CopyToFullMatrix3()
+    np.testing.assert_allclose(central, R @ np.diag(payload.inertia) @ R.T, atol=1e-15)
+    # On the plant: the composite CoM moves toward the payload's point in World.
+    plant = model.plant
+    context = plant.CreateDefaultContext()
+    c0, m0 = plant.CalcCenterOfMassPositionInWorld(context), plant.CalcTotalMass(context)
+    dut.apply_payload(payload, model, context)
+    p_WP = model.end_effector_frame.CalcPoseInWorld(context) @ np.array(payload.offset)
+    np.testing.assert_allclose(plant.CalcCenterOfMassPositionInWorld(context),
+                               c0 + 0.7 / (m0 + 0.7) * (p_WP - c0), atol=1e-12)

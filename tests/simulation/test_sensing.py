@@ -17,16 +17,16 @@ from aerial_drake.simulation.scenarios.perturbations import Sensing
 PERIOD = 1e-3
 
 
-def _sensed(sensing, x_of_t, duration):
+def _sensed(sensing, x_of_t, duration, period=PERIOD):
     """The sensor's output logged at each sample, for the input ``x_of_t`` (times, (n, nx))."""
     model = make_plant("rigid")
     builder = DiagramBuilder()
     times, values = x_of_t
     source = builder.AddSystem(TrajectorySource(PiecewisePolynomial.FirstOrderHold(
         times, values.T)))
-    sensor = builder.AddSystem(dut.StateSensor(model, sensing, PERIOD, duration))
+    sensor = builder.AddSystem(dut.StateSensor(model, sensing, period, duration))
     builder.Connect(source.get_output_port(), sensor.GetInputPort("state"))
-    logger = LogVectorOutput(sensor.GetOutputPort("measured_state"), builder, PERIOD)
+    logger = LogVectorOutput(sensor.GetOutputPort("measured_state"), builder, period)
     diagram = builder.Build()
     simulator = Simulator(diagram)
     context = simulator.get_mutable_context()
@@ -42,12 +42,18 @@ def _ramp(model, duration):
     return times, np.outer(times, np.ones(nx)) + 1.0
 
 
-@pytest.mark.parametrize("steps", [0, 3])
-def test_delay_in_whole_samples(steps):
+@pytest.mark.parametrize("delay, period, steps", [
+    (0.0, PERIOD, 0), (3 * PERIOD, PERIOD, 3),
+    # 0.29 / 0.01 = 28.999999999999996 in floating point: 29 samples, not 28.
+    (0.29, 0.01, 29),
+    # Not a multiple of the period (the scenario refuses it; the sensor rounds): 2.6 -> 3.
+    (2.6e-3, PERIOD, 3), (2.4e-3, PERIOD, 2)])
+def test_delay_in_whole_samples_rounded(delay, period, steps):
     model = make_plant("rigid")
-    _, t, y = _sensed(Sensing(delay=steps * PERIOD), _ramp(model, 0.05), 0.05)
+    duration = 0.05 if period == PERIOD else 0.4
+    _, t, y = _sensed(Sensing(delay=delay), _ramp(model, duration), duration, period)
     k = np.arange(len(t))
-    expected = 1.0 + np.maximum(k - steps, 0) * PERIOD
+    expected = 1.0 + np.maximum(k - steps, 0) * period
     np.testing.assert_allclose(y[:, -1], expected, atol=1e-12)
 
 

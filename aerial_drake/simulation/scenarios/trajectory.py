@@ -3,7 +3,8 @@
 from them (a waypoint list that cannot be interpolated, a user's module that does not import,
 a function whose samples have the wrong shapes), and for a kind whose derivatives are the
 user's (the ``python`` kind: ``user_derivatives`` in the registry of kinds) the derivatives it
-gives against finite differences over the whole run."""
+gives against finite differences over the whole run, within :data:`SAMPLING_TIME_LIMIT` (a
+function that never returns is stopped and named, not waited for)."""
 
 from __future__ import annotations
 
@@ -18,11 +19,15 @@ import numpy as np
 from aerial_drake.simulation.scenarios.checks import ScenarioError
 from aerial_drake.trajectories.continuity import find_discontinuity
 from aerial_drake.trajectories.kinds import REFERENCE_KINDS, reference_of
+from aerial_drake.trajectories.time_limit import TimeLimitExceeded, time_limit
 
-__all__ = ["check_trajectory", "resolve_python_path", "PYTHON_CHECK_PERIOD"]
+__all__ = ["check_trajectory", "resolve_python_path", "PYTHON_CHECK_PERIOD",
+           "SAMPLING_TIME_LIMIT"]
 
 #: Sample period of the load-time derivative check of a ``python`` reference (s).
 PYTHON_CHECK_PERIOD = 0.01
+#: The time that check may take (s): a few thousand calls of the user's function.
+SAMPLING_TIME_LIMIT = 30.0
 _QUOTED = re.compile(r"'([A-Za-z_][\w.\[\]*]*)'")
 
 
@@ -40,11 +45,18 @@ def check_trajectory(scenario: Any, joint_nominal: np.ndarray) -> None:
         return
     count = max(int(math.ceil(scenario.duration / PYTHON_CHECK_PERIOD)), 3)
     times = np.linspace(0.0, scenario.duration, count + 1)
+    function = scenario.trajectory.python.function
     try:
-        found_jump = find_discontinuity(source.sample, times)
+        with time_limit(SAMPLING_TIME_LIMIT, f"python.function {function!r}"):
+            found_jump = find_discontinuity(source.sample, times)
+    except TimeLimitExceeded:
+        raise ScenarioError(f"trajectory: python.function {function!r} did not finish the "
+                            f"load-time check within {SAMPLING_TIME_LIMIT:g} s (about "
+                            f"{times.size} samples over [0, {scenario.duration:g}] s): a loop "
+                            "that never ends, or a call far slower than the law's period? "
+                            "Make f(t) return promptly", "trajectory.python.function") from None
     except Exception as err:  # the user's function: whatever it raises, named, before a run
-        raise ScenarioError(f"trajectory: python.function "
-                            f"{scenario.trajectory.python.function!r} failed while sampled "
+        raise ScenarioError(f"trajectory: python.function {function!r} failed while sampled "
                             f"over [0, {scenario.duration:g}] s: {type(err).__name__}: {err}",
                             "trajectory.python.function") from None
     if found_jump is not None:
