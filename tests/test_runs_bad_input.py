@@ -262,6 +262,14 @@ def test_overlay_legend_names_the_runs_each_window_belongs_to(run_folder, tmp_pa
     fig = plots.figure_com(plots.series([nominal, other], ["first", "second"]))
     labels = [t.get_text() for legend in fig.legends for t in legend.get_texts()]
     assert "force on the vehicle (0.01-0.02 s) of second" in labels, labels
+    many = dataclasses.replace(nominal, scenario=dataclasses.replace(
+        nominal.scenario, disturbances=[Disturbance(target="vehicle", start=0.004 * k,
+                                                    stop=0.004 * k + 0.002)
+                                        for k in range(10)]))
+    fig = plots.figure_com(plots.series([many, other], ["first", "second"]))
+    labels = [t.get_text() for legend in fig.legends for t in legend.get_texts()]
+    windows = [label for label in labels if label.startswith("force on the vehicle")]
+    assert windows == ["force on the vehicle (11 windows, 0-0.038 s) of first, second"], labels
 
 
 def test_nominal_and_disturbed_descriptions_say_the_difference():

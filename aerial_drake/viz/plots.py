@@ -77,22 +77,38 @@ def _new_figure(rows: int, height: float) -> tuple[Figure, list]:
 def _shade_windows(axes, scenario: Scenario, t_end: float,
                    owners: dict[tuple, list[str]] | None = None) -> list:
     """Shade the disturbance windows that start before ``t_end``, limit the time axis to
-    [0, t_end]; return legend handles, one per window. ``owners``: the labels of the runs
-    each window ``(target, start, stop)`` belongs to, named in its legend entry."""
+    [0, t_end]; return legend handles, one per window (one per target beyond
+    :data:`LEGEND_WINDOWS` of it). ``owners``: the labels of the runs each window ``(target,
+    start, stop)`` belongs to, named in its legend entry."""
     axes[0].set_xlim(0.0, max(t_end, 1e-3))
-    handles: dict[str, list] = {}
+    shown: dict[str, list] = {}
     for d in scenario.disturbances:
         if d.start >= t_end:
             continue
         color, alpha = WINDOW_COLORS.get(d.target, ("tab:gray", 0.2))
         for ax in axes:
             ax.axvspan(d.start, d.stop, color=color, alpha=alpha, linewidth=0, zorder=0)
-        label = f"{WINDOW_LABELS.get(d.target, d.target)} ({d.start:g}-{d.stop:g} s)"
-        if owners:
-            label += f" of {', '.join(owners[(d.target, d.start, d.stop)])}"
-        handles.setdefault(d.target, []).append(Patch(color=color, alpha=alpha + 0.1,
-                                                      label=label))
-    return [h for hs in handles.values() for h in hs]
+        shown.setdefault(d.target, []).append(d)
+    handles = []
+    for target, windows in shown.items():
+        color, alpha = WINDOW_COLORS.get(target, ("tab:gray", 0.2))
+        name = WINDOW_LABELS.get(target, target)
+        if len(windows) > LEGEND_WINDOWS:  # many windows: one entry, not a legend of hundreds
+            whose = sorted({o for d in windows for o in (owners or {}).get(
+                (d.target, d.start, d.stop), [])})
+            labels = [f"{name} ({len(windows)} windows, {min(d.start for d in windows):g}-"
+                      f"{max(d.stop for d in windows):g} s)"
+                      + (f" of {', '.join(whose)}" if whose else "")]
+        else:
+            labels = [f"{name} ({d.start:g}-{d.stop:g} s)"
+                      + (f" of {', '.join(owners[(d.target, d.start, d.stop)])}" if owners
+                         else "") for d in windows]
+        handles += [Patch(color=color, alpha=alpha + 0.1, label=label) for label in labels]
+    return handles
+
+
+#: Windows of one target named one by one in a legend; more share one entry.
+LEGEND_WINDOWS = 6
 
 
 #: Colours of the runs in order: the paper's black and grey first, then Matplotlib's.
