@@ -23,6 +23,7 @@ __all__ = ["build_parser", "main"]
 def main(argv: list[str] | None = None) -> int:
     """Run the command in ``argv`` (default: the process's arguments); returns the exit status
     (docs/reliability.md, "Exit statuses")."""
+    from aerial_drake.cli.errors import interruption_in
     from aerial_drake.simulation.interrupts import exit_status_of, handling
 
     args = build_parser().parse_args(argv)
@@ -37,6 +38,11 @@ def main(argv: list[str] | None = None) -> int:
         return report_error(args, exit_status_of(err), f"interrupted ({str(err) or 'Ctrl-C'}) "
                             "outside the simulation; nothing more written")
     except Exception as err:  # a bug, or a fault not foreseen: one line unless --debug
+        interrupt = interruption_in(err)  # e.g. Ctrl-C while pydrake's modules load
+        if interrupt is not None and not args.debug:
+            return report_error(args, exit_status_of(interrupt), f"interrupted "
+                                f"({str(interrupt) or 'Ctrl-C'}) outside the simulation; "
+                                "nothing more written")
         if args.debug:
             raise
         return report_error(args, 1, f"unexpected {type(err).__name__}: {err} (rerun with "

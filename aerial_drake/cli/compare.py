@@ -12,6 +12,9 @@ from aerial_drake.cli.errors import report_error, report_exception
 from aerial_drake.cli.overrides import scenario_overrides
 from aerial_drake.cli.restart import compile_first
 
+#: The most worker processes ``--jobs`` may ask for (aerial_drake.studies.compare.MAX_JOBS).
+MAX_JOBS = 256
+
 
 def cmd_compare(args: argparse.Namespace) -> int:
     """``aerial-drake compare SCENARIO [--controllers A,B] [--jobs N] [--duration S]
@@ -20,6 +23,10 @@ def cmd_compare(args: argparse.Namespace) -> int:
     failed. With ``--json`` stdout holds only JSON (comparison.json's content, or an error
     object); the table and the "wrote" lines go to stderr."""
     from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
+    if args.jobs is not None and not 1 <= args.jobs <= MAX_JOBS:
+        return report_error(args, 2, ScenarioError(
+            f"--jobs must be 1 to {MAX_JOBS} (1 runs the controllers one after the other); "
+            f"got {args.jobs}", "--jobs"))
     try:  # a misspelt scenario or override fails at once, not after the first-run compile
         overrides = scenario_overrides(args)
         load_scenario(args.scenario, overrides=overrides)

@@ -44,12 +44,28 @@ EXIT_STATUSES = {
 _INTERRUPTED = "aerial_drake.simulation.runner.SimulationInterrupted"
 
 
+def interruption_in(err: BaseException) -> KeyboardInterrupt | None:
+    """The KeyboardInterrupt (Ctrl-C, or a stop signal: simulation.interrupts) behind ``err``
+    in its chain of causes, if any: a signal during an import of a compiled module (pydrake's,
+    while loading) comes back as ``ImportError: initialization failed`` raised from it."""
+    seen: set[int] = set()
+    while err is not None and id(err) not in seen:
+        if isinstance(err, KeyboardInterrupt):
+            return err
+        seen.add(id(err))
+        err = err.__cause__ or (None if err.__suppress_context__  # type: ignore[assignment]
+                                else err.__context__)
+    return None
+
+
 def exit_status_for(err: BaseException) -> int | None:
     """The command line's exit status for ``err``: 128 + n for an interruption by signal n
     (SimulationInterrupted, a KeyboardInterrupt), else :data:`EXIT_STATUSES`' entry for its
-    class; None for an error not foreseen (a bug: the command line's catch-all)."""
-    if isinstance(err, KeyboardInterrupt):
-        return 128 + getattr(err, "signum", signal.SIGINT)
+    class; None for an error not foreseen (a bug: the command line's catch-all). An error
+    raised from an interruption (:func:`interruption_in`) is that interruption."""
+    interrupt = interruption_in(err)
+    if interrupt is not None:
+        return 128 + getattr(interrupt, "signum", signal.SIGINT)
     for cls in type(err).__mro__:
         name = f"{cls.__module__}.{cls.__qualname__}"
         if name == _INTERRUPTED:

@@ -68,8 +68,15 @@ _BUILT_IN = tuple(_REGISTRY)
 def register_controller(name: str, factory: ControllerFactory) -> None:
     """Make ``controller: {type: name}`` select ``factory`` (module docstring); the built-in
     names cannot be replaced."""
+    if not isinstance(name, str) or not name.strip():
+        raise ValueError(f"register_controller: name must be a non-empty text (the "
+                         f"scenario's controller.type); got {name!r}")
     if name in _BUILT_IN:
         raise ValueError(f"'{name}' is a built-in controller; choose another name")
+    if not callable(factory):
+        raise TypeError(f"register_controller('{name}', factory): factory must be callable, "
+                        f"factory(scenario, model) -> a LeafSystem (e.g. a ControllerBase "
+                        f"subclass); got {type(factory).__name__} {factory!r}")
     _REGISTRY[name] = factory
 
 

@@ -103,7 +103,10 @@ def disturbance_response(t: np.ndarray, entries: Mapping[str, np.ndarray],
     ``[start, stop + tail]``, cut at the next window's start (so one response does not see the
     next disturbance). ``ee_to_com_peak_ratio`` tests the paper's claim that a force on the
     helicopter barely moves the end effector (Fig. 3 against Fig. 4). Peaks are None when the
-    log does not reach the window. ``entries``: the tracking errors by name (``{name: (N,
+    log does not reach the window; a response whose log ends before ``evaluated_s`` does (a run
+    stopped by a failure, or one that ends inside it) has ``"partial": true`` and
+    ``"log_end_s"``, its peaks being those of the part logged (the key is absent otherwise).
+    ``entries``: the tracking errors by name (``{name: (N,
     size)}``, :mod:`aerial_drake.simulation.tracking`).
     """
     ee = entries["ee_position_error"][:, 0]
@@ -120,9 +123,12 @@ def disturbance_response(t: np.ndarray, entries: Mapping[str, np.ndarray],
         if mask.any():
             ee_peak, com_peak = float(ee[mask].max()), float(com[mask].max())
             ratio = ee_peak / com_peak if com_peak > 0 else None
-        out.append({"target": target, "window_s": [start, stop], "evaluated_s": [start, end],
+        response = {"target": target, "window_s": [start, stop], "evaluated_s": [start, end],
                     "ee_position_error_peak_m": ee_peak, "com_error_peak_m": com_peak,
-                    "ee_to_com_peak_ratio": ratio})
+                    "ee_to_com_peak_ratio": ratio}
+        if mask.any() and float(t[-1]) < end - 1e-9:  # cut short: say so (not as if complete)
+            response.update(partial=True, log_end_s=float(t[-1]))
+        out.append(response)
     return out
 
 

@@ -164,6 +164,30 @@ def prepare_folder(folder: str | os.PathLike, need_mb: float = 0.0) -> FolderLoc
     return lock
 
 
+def check_extra_names(files: Any, reserved: tuple[str, ...]) -> None:
+    """Refuse (OutputError naming it, before anything is written) a name of ``files`` (``{name:
+    text}``, written into a run's folder) that is not a plain file name there: empty, ``.``
+    or ``..``, absolute, holding a path separator or a NUL, or one of the run's own files
+    ``reserved`` (and the lock)."""
+    if not isinstance(files, dict):
+        raise OutputError(f"extra_files: expected a {{name: text}} dict, got "
+                          f"{type(files).__name__}")
+    for name, text in files.items():
+        plain = (isinstance(name, str) and name not in ("", ".", "..")
+                 and not any(c in name for c in ("/", "\\", os.sep, "\0"))
+                 and not os.path.isabs(name))
+        if not plain:
+            raise OutputError(f"extra_files: {name!r} is not a plain file name in the run's "
+                              "folder (no '..', no absolute path, no path separator); "
+                              "nothing was written")
+        if name in (*reserved, FolderLock.NAME) or name.endswith(".tmp"):
+            raise OutputError(f"extra_files: {name!r} would replace the run's own file; "
+                              "choose another name; nothing was written")
+        if not isinstance(text, str):
+            raise OutputError(f"extra_files: {name!r}: expected text (str), got "
+                              f"{type(text).__name__}; nothing was written")
+
+
 def write_result_set(folder: Path, files: list[tuple[str, Callable[[IO[bytes]], object]]],
                      last: tuple[str, Callable[[IO[bytes]], object]]) -> None:
     """Write ``files`` then ``last`` (the file whose presence says the set is complete) into

@@ -84,16 +84,47 @@ def _named(log: dict[str, np.ndarray], array: str) -> dict[str, np.ndarray]:
     return entries(log[array], layout) if layout is not None else {}
 
 
+class RunFolderError(ValueError):
+    """A run folder's file cannot be read (truncated, corrupt); the message names the file
+    and the fix. The command line exits 2 (docs/reliability.md)."""
+
+
 def load_run(folder: str | Path) -> Run:
-    """Load ``log.npz``, ``metrics.json`` and ``scenario.yaml`` from a run folder."""
+    """Load ``log.npz``, ``metrics.json`` and ``scenario.yaml`` from a run folder.
+
+    The scenario is read, not validated: drawing a run needs only what it logged (its
+    references among them), so neither the robot's files nor a ``python`` trajectory's module
+    are loaded, and a run whose module has moved since still plots. A file that cannot be read
+    raises :class:`RunFolderError` (FileNotFoundError for a missing one)."""
     folder = Path(folder)
     missing = [f for f in ("log.npz", "metrics.json", "scenario.yaml")
                if not (folder / f).is_file()]
     if missing:
         raise FileNotFoundError(f"{folder} is not a complete run folder: missing {missing} "
                                 "(write one with `aerial-drake run SCENARIO`)")
-    with np.load(folder / "log.npz") as data:
-        log = {k: data[k] for k in data.files}
-    metrics = json.loads((folder / "metrics.json").read_text())
-    scenario = load_scenario(folder / "scenario.yaml")
+    log = _read_log(folder / "log.npz")
+    try:
+        metrics = json.loads((folder / "metrics.json").read_text(encoding="utf-8"))
+    except (ValueError, OSError) as err:  # (JSONDecodeError and UnicodeDecodeError: ValueError)
+        raise RunFolderError(f"{folder / 'metrics.json'} cannot be read ({err}): the file is "
+                             "corrupt; run the scenario again to rewrite it") from None
+    if not isinstance(metrics, dict):
+        raise RunFolderError(f"{folder / 'metrics.json'} holds a {type(metrics).__name__}, "
+                             "not a run's metrics; run the scenario again to rewrite it")
+    scenario = load_scenario(folder / "scenario.yaml", validate=False)
     return Run(name=scenario.name, log=log, scenario=scenario, metrics=metrics)
+
+
+def _read_log(path: Path) -> dict[str, np.ndarray]:
+    """Every array of ``log.npz`` (read now, so a truncated file fails here, naming itself)."""
+    try:
+        with np.load(path) as data:
+            log = {k: data[k] for k in data.files}
+    except Exception as err:  # BadZipFile, EOFError, zlib.error, ValueError, OSError
+        raise RunFolderError(f"{path} cannot be read ({type(err).__name__}: {err}): the file "
+                             "is truncated or corrupt; run the scenario again to rewrite "
+                             "it") from None
+    if "t" not in log:
+        raise RunFolderError(f"{path} has no time array 't' (it holds {sorted(log)}): not a "
+                             "run's log; run the scenario again to rewrite it")
+    return log

@@ -32,6 +32,7 @@ from aerial_drake.simulation.nonfinite import (
 )
 from aerial_drake.simulation.outputs import (
     FolderLock,
+    check_extra_names,
     prepare_folder,
     strict_json,
     write_result_set,
@@ -45,6 +46,7 @@ from aerial_drake.simulation.run_log import (
 )
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
 from aerial_drake.simulation.scenarios.checks import REALTIME, estimated_log_mb, number
+from aerial_drake.simulation.scenarios.fields import plain_values
 from aerial_drake.simulation.tracking import Layout
 from aerial_drake.trajectories.paper import compile_reference
 
@@ -246,11 +248,14 @@ def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
     live view. ``extra_files()`` gives more ``{name: text}`` files for the run's folder (e.g.
     the viewer's ``replay.html``), written with the others, inside the folder's lock and
     before ``metrics.json``; it is called once the simulation has stopped, however it stopped.
+    A name that is not a plain file name in the folder (``..``, absolute, a separator) or
+    names a run's own file is refused with OutputError before anything is written.
     """
     if not isinstance(scenario, Scenario):
         raise ScenarioError(f"scenario: expected a Scenario, got {type(scenario).__name__} "
                             f"{scenario!r}; load one with aerial_drake.simulation.scenarios."
                             "load_scenario(name_or_path)", "scenario")
+    scenario = plain_values(scenario)  # numpy arrays in vector fields read as lists
     scenario.validate()
     # Random windows drawn into concrete ones: the metrics' phases and scenario.yaml see them.
     scenario = resolve_random_disturbances(scenario)
@@ -326,6 +331,7 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
                            completed=failure is None, failure=failure, layouts=layouts,
                            task_labels=_task_labels(loop))
         extra = extra_files() if extra_files is not None else {}
+        check_extra_names(extra, RUN_FILES)  # before anything is written
         if lock is not None:
             result.out_dir = write_outputs(result, lock.folder, extra)
     if interrupted is None and held:  # a signal while writing: the files are complete
@@ -340,6 +346,10 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
         error.result = result
         raise error
     return result
+
+
+#: The files every run writes into its folder (write_outputs).
+RUN_FILES = ("log.npz", "scenario.yaml", "metrics.json")
 
 
 def _task_labels(loop: ClosedLoop) -> tuple[str, ...]:

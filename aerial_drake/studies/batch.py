@@ -112,7 +112,7 @@ def _not_started(batch: Batch, keys) -> None:
 
 def _run_serial(batch: Batch, scenarios: dict[str, Scenario], folders: dict[str, Path],
                 progress: bool, stream: TextIO | None, say, labels: dict[str, str]) -> None:
-    for key, scenario in scenarios.items():
+    for index, (key, scenario) in enumerate(scenarios.items(), 1):
         folder = folders[key]
         if say:
             say(f"running {labels.get(key, repr(key))} ({scenario.duration:g} s) -> "
@@ -126,6 +126,9 @@ def _run_serial(batch: Batch, scenarios: dict[str, Scenario], folders: dict[str,
             except SimulationFailed as err:
                 batch.failures[key] = str(err)
             _load_complete(batch, key, folder)
+            if say:
+                say(f"  [{index}/{len(scenarios)}] "
+                    f"{labels.get(key, repr(key))}: {batch.failures.get(key, 'done')}\n")
         except KeyboardInterrupt as err:  # before the simulation, or while loading its logs
             signum = getattr(err, "signum", signal.SIGINT)
             batch.failures.setdefault(key, f"interrupted ({signal_name(signum)}) outside "
@@ -151,12 +154,16 @@ def _run_pooled(batch: Batch, scenarios: dict[str, Scenario], folders: dict[str,
         if say:
             say(f"running {', '.join(labels.get(k, repr(k)) for k in scenarios)} in "
                 f"{workers} processes\n")
-        for key, future in futures.items():
+        keys = {future: key for key, future in futures.items()}
+        # A line per run as it finishes (in the order they finish), with the count.
+        for count, future in enumerate(concurrent.futures.as_completed(keys), 1):
+            key = keys[future]
             failure, signum = future.result()
             if failure:
                 batch.failures[key] = failure
             if say:
-                say(f"  {labels.get(key, repr(key))}: {failure or 'done'}\n")
+                say(f"  [{count}/{len(keys)}] {labels.get(key, repr(key))}: "
+                    f"{failure or 'done'}\n")
             if signum is not None:  # the worker itself was signalled (e.g. Ctrl-C's group)
                 batch.interrupted = signum
                 break

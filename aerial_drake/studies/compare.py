@@ -32,6 +32,8 @@ from aerial_drake.studies.batch import run_batch
 from aerial_drake.studies.summary import format_table
 
 DEFAULT_CONTROLLERS = ("paper", "uncoupled", "static_compensation")
+#: The most worker processes ``jobs`` may ask for (as the command line's ``--jobs``).
+MAX_JOBS = 256
 
 
 @dataclass
@@ -102,6 +104,9 @@ def run_compare(scenario: str, controllers: tuple[str, ...] = DEFAULT_CONTROLLER
     summary or comparison is written, and :attr:`CompareResult.interrupted` holds the
     signal's number (:func:`aerial_drake.studies.batch.run_batch`, also with ``jobs`` > 1).
     Only complete run folders (``metrics.json`` present) are loaded and drawn."""
+    if isinstance(jobs, bool) or not isinstance(jobs, int) or not 1 <= jobs <= MAX_JOBS:
+        raise ScenarioError(f"jobs must be an integer, 1 to {MAX_JOBS} (1 runs the "
+                            f"controllers one after the other); got {jobs!r}", "jobs")
     if not controllers:
         raise ScenarioError("--controllers: name at least one controller")
     if len(set(controllers)) != len(controllers):

@@ -32,6 +32,12 @@ def format_summary(m: dict) -> str:
                          "base att max (mrad)"], rows))
     lines.append(f"min sigma_min(J_3) = {m['min_sigma_min_J3']:.4f} (Assumption 1: > 0); "
                  f"min |f_d| = {m['min_f_d_norm_N']:.1f} N (Assumption 2: > 0)")
+    for r in m.get("disturbance_response", []):
+        if r.get("partial"):
+            lines.append(f"disturbance on {r['target']} {r['window_s'][0]:g}-"
+                         f"{r['window_s'][1]:g} s: response partial (the log ends at "
+                         f"{r['log_end_s']:g} s, before {r['evaluated_s'][1]:g} s); its peaks "
+                         "are those of the part logged")
     late = next((k for k in m if k.startswith("saturated_s_after")), None)
     sat = [k for k, v in m["saturated_s_total"].items() if v > 0]
     if not sat:
@@ -86,12 +92,19 @@ def format_table(metrics: dict[str, dict]) -> str:
     rows += _phase_rows(metrics)
     n_windows = max(len(m.get("disturbance_response", [])) for m in metrics.values())
     for w in range(n_windows):
-        first = next(m["disturbance_response"][w] for m in metrics.values()
-                     if len(m.get("disturbance_response", [])) > w)
+        responses = [m["disturbance_response"][w] for m in metrics.values()
+                     if len(m.get("disturbance_response", [])) > w]
+        if all(r.get("ee_position_error_peak_m") is None for r in responses):
+            continue  # after every run's end (or before its log): nothing to show
+        first = responses[0]
         a, b = first["evaluated_s"]
         start, stop = first["window_s"]
         rows.append((f"disturbance on {first['target']} {start:g}-{stop:g} s, peaks over "
                      f"{a:g}-{b:g} s", [""] * len(names)))
+        if any(r.get("partial") for r in responses):  # a run's log ends inside the response
+            row("  partial: the log ends at",
+                lambda m: f"{m['disturbance_response'][w]['log_end_s']:g} s"
+                if m["disturbance_response"][w].get("partial") else "no")
         row("  EE position error peak (mm)",
             lambda m: f"{1e3 * m['disturbance_response'][w]['ee_position_error_peak_m']:.2f}")
         row("  CoM error peak (mm)",
@@ -110,7 +123,8 @@ def format_table(metrics: dict[str, dict]) -> str:
                                          f"{m[late][k]:.3f}")
     row("min sigma_min(J_3)", lambda m: f"{m['min_sigma_min_J3']:.4f}")
     row("min |f_d| (N)", lambda m: f"{m['min_f_d_norm_N']:.1f}")
-    for side in ("left", "right"):
+    for side in [s for s in ("left", "right")
+                 if any(s in m.get("rotors", {}) for m in metrics.values())]:
         row(f"rotor {side} speed min..max (rad/s)",
             lambda m, s=side: f"{m['rotors'][s]['speed_min_rad_s']:.3f}.."
                               f"{m['rotors'][s]['speed_max_rad_s']:.3f}")

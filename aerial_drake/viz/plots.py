@@ -14,7 +14,8 @@ optionally, a disturbed run this module writes
 
 each as ``.png`` and ``.pdf``. As in the paper: nominal black, disturbed grey (each labelled
 by its run's name), the disturbance on the helicopter shaded green and the one at the end
-effector orange (the windows of every run's scenario, each once). :func:`series` colours and
+effector orange (the windows of every run's scenario, each once; with several runs each
+window's legend entry names the runs whose window it is). :func:`series` colours and
 labels any number of runs for Figs. 3-5 (``aerial-drake plot``, :mod:`aerial_drake.viz.run_plots`).
 
 Nothing is recomputed from the model: the actual CoM and end-effector positions are the
@@ -73,21 +74,41 @@ def _new_figure(rows: int, height: float) -> tuple[Figure, list]:
     return fig, list(axes)
 
 
-def _shade_windows(axes, scenario: Scenario, t_end: float) -> list:
+def _shade_windows(axes, scenario: Scenario, t_end: float,
+                   owners: dict[tuple, list[str]] | None = None) -> list:
     """Shade the disturbance windows that start before ``t_end``, limit the time axis to
-    [0, t_end]; return legend handles, one per window."""
+    [0, t_end]; return legend handles, one per window (one per target beyond
+    :data:`LEGEND_WINDOWS` of it). ``owners``: the labels of the runs each window ``(target,
+    start, stop)`` belongs to, named in its legend entry."""
     axes[0].set_xlim(0.0, max(t_end, 1e-3))
-    handles: dict[str, list] = {}
+    shown: dict[str, list] = {}
     for d in scenario.disturbances:
         if d.start >= t_end:
             continue
         color, alpha = WINDOW_COLORS.get(d.target, ("tab:gray", 0.2))
         for ax in axes:
             ax.axvspan(d.start, d.stop, color=color, alpha=alpha, linewidth=0, zorder=0)
-        label = f"{WINDOW_LABELS.get(d.target, d.target)} ({d.start:g}-{d.stop:g} s)"
-        handles.setdefault(d.target, []).append(Patch(color=color, alpha=alpha + 0.1,
-                                                      label=label))
-    return [h for hs in handles.values() for h in hs]
+        shown.setdefault(d.target, []).append(d)
+    handles = []
+    for target, windows in shown.items():
+        color, alpha = WINDOW_COLORS.get(target, ("tab:gray", 0.2))
+        name = WINDOW_LABELS.get(target, target)
+        if len(windows) > LEGEND_WINDOWS:  # many windows: one entry, not a legend of hundreds
+            whose = sorted({o for d in windows for o in (owners or {}).get(
+                (d.target, d.start, d.stop), [])})
+            labels = [f"{name} ({len(windows)} windows, {min(d.start for d in windows):g}-"
+                      f"{max(d.stop for d in windows):g} s)"
+                      + (f" of {', '.join(whose)}" if whose else "")]
+        else:
+            labels = [f"{name} ({d.start:g}-{d.stop:g} s)"
+                      + (f" of {', '.join(owners[(d.target, d.start, d.stop)])}" if owners
+                         else "") for d in windows]
+        handles += [Patch(color=color, alpha=alpha + 0.1, label=label) for label in labels]
+    return handles
+
+
+#: Windows of one target named one by one in a legend; more share one entry.
+LEGEND_WINDOWS = 6
 
 
 #: Colours of the runs in order: the paper's black and grey first, then Matplotlib's.
@@ -129,16 +150,20 @@ def _t_end(runs) -> float:
 
 
 def _shade_all(axes, runs: list[Series]) -> list:
-    """Shade every run's disturbance windows once (the union), see :func:`_shade_windows`."""
-    seen, windows = set(), []
-    for run, _, _ in runs:
+    """Shade every run's disturbance windows once (the union), see :func:`_shade_windows`;
+    with several runs each window's legend entry names the runs it belongs to."""
+    owners: dict[tuple, list[str]] = {}
+    windows = []
+    for run, _, label in runs:
         for d in run.scenario.disturbances:
             key = (d.target, d.start, d.stop)
-            if key not in seen:
-                seen.add(key)
+            if key not in owners:
+                owners[key] = []
                 windows.append(d)
+            if label not in owners[key]:
+                owners[key].append(label)
     union = dataclasses.replace(runs[0][0].scenario, disturbances=windows)
-    return _shade_windows(axes, union, _t_end(runs))
+    return _shade_windows(axes, union, _t_end(runs), owners if len(runs) > 1 else None)
 
 
 def _legend(fig: Figure, handles: list) -> None:

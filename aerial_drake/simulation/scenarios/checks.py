@@ -145,6 +145,12 @@ SEED = Range(0, 2 ** 32 - 1, fix="any integer >= 0")
 TIME = Range(0.0, 86400.0, "s", fix="a window inside the run")
 MAGNITUDE = Range(0.0, 1e5, fix="the paper's windows are 40-50 N, 20 N m")
 COUNT = Range(0, 100, fix="0 turns the random windows off")
+#: The most disturbance windows a scenario holds (its own and random_disturbances.count): more
+#: would make the run's scenario.yaml larger than a scenario file may be (reading.py).
+MAX_WINDOWS = 1000
+#: Two window edges closer than this but not equal (round-off, e.g. 0.1 + 0.2 and 0.3) cannot
+#: both be breaks of the wrench schedule (Drake's PiecewisePolynomial needs distinct times).
+MIN_EDGE_GAP_S = 1e-9
 TRAJECTORY = {
     "center": (3, Range(-1e3, 1e3, "m")),
     "basic_amplitude": (None, Range(0.0, 100.0, "m", fix="the paper's is 0.5 m")),

@@ -6,6 +6,7 @@
 import dataclasses
 from typing import Any
 
+import numpy as np
 from pydrake.systems.analysis import SimulatorConfig
 
 from aerial_drake.simulation.scenarios.checks import show
@@ -67,4 +68,45 @@ def mismatch(kind: Any, v: Any) -> str | None:
         return f"expected text, got {show(v)}"
     if kind is bool and not isinstance(v, bool):
         return f"expected true or false, got {show(v)}"
+    return None
+
+
+def plain_values(value: Any) -> Any:
+    """``value`` (a scenario, a section, a list) with every numpy array as a list and every
+    numpy scalar as a Python number, recursively through dataclasses and lists: what the
+    Python API accepts in a vector field (``force=np.array(...)``), read as the YAML's list
+    would be. A copy where anything changed (the caller's objects are left alone), else the
+    same object."""
+    if isinstance(value, np.ndarray):
+        return plain_values(value.tolist())
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, (list, tuple)):
+        items = [plain_values(v) for v in value]
+        changed = any(a is not b for a, b in zip(items, value))
+        return (list(items) if isinstance(value, list) else tuple(items)) if changed else value
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        changes = {}
+        for f in dataclasses.fields(value):
+            old = getattr(value, f.name)
+            new = plain_values(old)
+            if new is not old:
+                changes[f.name] = new
+        return dataclasses.replace(value, **changes) if changes else value
+    return value
+
+
+def find_array(value: Any, prefix: str = "") -> str | None:
+    """The dotted name (``disturbances[0].force``) of the first numpy array in ``value`` (a
+    scenario or a section), or None. (A numpy scalar passes: it compares as a number.)"""
+    if isinstance(value, np.ndarray):
+        return prefix or "scenario"
+    if isinstance(value, (list, tuple)):
+        return next((found for i, v in enumerate(value)
+                     if (found := find_array(v, f"{prefix}[{i}]"))), None)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return next((found for f in dataclasses.fields(value)
+                     if (found := find_array(getattr(value, f.name),
+                                             f"{prefix}.{f.name}" if prefix else f.name))),
+                    None)
     return None

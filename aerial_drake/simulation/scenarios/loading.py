@@ -31,14 +31,17 @@ def shipped_scenarios() -> dict[str, Path]:
     return {p.stem: p for p in sorted(scenario_directory().glob("*.yaml"))}
 
 
-def load_scenario(name_or_path: str | Path, *, overrides: dict | None = None) -> Scenario:
+def load_scenario(name_or_path: str | Path, *, overrides: dict | None = None,
+                  validate: bool = True) -> Scenario:
     """Load a shipped scenario by name (``"nominal"``) or a YAML file by path, and validate it.
 
     Layered as Drake's ``yaml_load_typed`` layers defaults: the schema's defaults, then the
     file's fields, then ``overrides`` (dotted names into the nested sections, e.g.
     ``{"duration": 2.0, "gains.k_R": 300}``: :func:`.overrides.apply_overrides`; an unknown
     name or a value of the wrong type is a ScenarioError naming it); then one validation pass
-    (:meth:`Scenario.validate`). Every error names the file.
+    (:meth:`Scenario.validate`). Every error names the file. ``validate=False`` skips that
+    pass (it builds the robot and the reference, importing a ``python`` kind's module): for
+    reading a run folder's scenario.yaml, already checked when it ran.
     """
     if not isinstance(name_or_path, (str, Path)):
         raise ScenarioError(f"scenario: expected a shipped scenario's name or a path to a "
@@ -75,6 +78,8 @@ def load_scenario(name_or_path: str | Path, *, overrides: dict | None = None) ->
     scenario = resolve_python_path(_resolve_robot(scenario, path), path)
     scenario = dataclasses.replace(scenario, environment=resolve_environment(
         scenario.environment, path.resolve().parent))
+    if not validate:
+        return scenario
     try:
         return scenario.validate()
     except ScenarioError as err:

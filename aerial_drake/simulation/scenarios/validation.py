@@ -44,6 +44,8 @@ from aerial_drake.simulation.scenarios.checks import (
     MASS,
     MAX_LOG_MB,
     MAX_STEP,
+    MAX_WINDOWS,
+    MIN_EDGE_GAP_S,
     OFFSET,
     OLD_TARGETS,
     PERIOD,
@@ -77,6 +79,7 @@ from aerial_drake.simulation.scenarios.checks import (
     text,
     vector,
 )
+from aerial_drake.simulation.scenarios.fields import find_array
 from aerial_drake.simulation.scenarios.robot import robot_description, robot_facts
 from aerial_drake.simulation.scenarios.trajectory import check_trajectory
 from aerial_drake.simulation.scenarios.world import check_world
@@ -86,12 +89,42 @@ def validate_scenario(s: Any) -> None:
     """Check every value of scenario ``s`` (a :class:`.schema.Scenario`) once, in the order of
     its fields; raise ScenarioError naming the field, the value, the allowed range and the
     fix."""
+    array = find_array(s)
+    if array is not None:  # (a numpy array has no truth value: refused here, by name)
+        raise ScenarioError(f"{array} is a numpy array: give a list "
+                            "of Python numbers (value.tolist()); run_scenario converts them "
+                            "itself", array)
     facts = robot_facts(s)
     check_values(s, facts)
     check_trajectory(s, np.array(facts.joint_nominal))
     _check_controller(s.controller)
     check_perturbations(s)
     check_world(s)
+
+
+def _check_window_count(s: Any) -> None:
+    """At most MAX_WINDOWS windows, the random ones counted (a run's scenario.yaml holds them
+    all, and must read back as a scenario file)."""
+    count = len(s.disturbances)
+    random = s.random_disturbances.count
+    total = count + (int(random) if isinstance(random, int) and random > 0 else 0)
+    if total > MAX_WINDOWS:
+        raise ScenarioError(f"disturbances: {count} windows (and random_disturbances.count = "
+                            f"{random}) make {total}, more than a scenario holds "
+                            f"({MAX_WINDOWS}): merge adjacent windows, or split the run",
+                            "disturbances")
+
+
+def _check_window_edges(disturbances: list) -> None:
+    """Window edges are equal or at least MIN_EDGE_GAP_S apart (round-off otherwise)."""
+    edges = sorted((float(t), f"disturbances[{i}].{side}")
+                   for i, d in enumerate(disturbances)
+                   for side, t in (("start", d.start), ("stop", d.stop)))
+    for (a, name_a), (b, name_b) in zip(edges, edges[1:]):
+        if 0 < b - a < MIN_EDGE_GAP_S:
+            raise ScenarioError(f"{name_a} = {a!r} s and {name_b} = {b!r} s differ by "
+                                f"{b - a:.3g} s (round-off?): make them equal or at least "
+                                f"{MIN_EDGE_GAP_S:g} s apart", name_b)
 
 
 def _check_gains(gains: Any, n_task: int, task_rows: tuple[int, ...]) -> None:
@@ -177,6 +210,7 @@ def check_values(s: Any, robot: RobotFacts) -> None:
                      "joints (nor does any variant of this robot): remove rotors.speed")
     if not isinstance(s.disturbances, list):
         _fail("disturbances", s.disturbances, "a list of disturbance windows")
+    _check_window_count(s)
     for i, d in enumerate(s.disturbances):
         where = f"disturbances[{i}]"
         _target(f"{where}.target", d.target)
@@ -187,6 +221,7 @@ def check_values(s: Any, robot: RobotFacts) -> None:
                   "a window is [start, stop)")
         vector(f"{where}.force", d.force, 3, FORCE)
         vector(f"{where}.torque", d.torque, 3, TORQUE)
+    _check_window_edges(s.disturbances)
     number("sigma_min_J3_limit", s.sigma_min_J3_limit, SIGMA_LIMIT)
     number("f_d_limit", s.f_d_limit, F_D_LIMIT)
     limit = number("max_log_mb", s.max_log_mb, MAX_LOG_MB)
