@@ -11,9 +11,21 @@ changed it, so that a scenario file means the same run on every supported releas
   ``true`` would make every logger record at each integrator step as well as at its period.
   Shipped files leave the field out; a user's file may keep ``false`` (removed here before
   Drake sees it) but not ``true`` (an error saying to remove the field).
+- ``MultibodyPlantConfig.discrete_contact_approximation: tamsi``: 1.51.1 has the TAMSI solver,
+  1.58.0 does not (``DiscreteContactApproximation`` lost ``kTamsi``). The choices a scenario's
+  ``plant`` section accepts are the installed release's (:data:`DISCRETE_CONTACT_APPROXIMATIONS`),
+  so ``tamsi`` is refused at load, naming the field and the choices, where Drake lacks it.
 """
 
 from typing import Any
+
+from pydrake.multibody.plant import DiscreteContactApproximation
+
+#: The ``plant.discrete_contact_approximation`` names the installed Drake accepts (its enum's
+#: members, lower case): ``tamsi`` only where the release still has that solver.
+DISCRETE_CONTACT_APPROXIMATIONS: tuple[str, ...] = tuple(
+    name for name in ("tamsi", "sap", "similar", "lagged")
+    if hasattr(DiscreteContactApproximation, "k" + name.capitalize()))
 
 # SimulatorConfig fields that some supported release lacks: name -> (the only accepted
 # value, why, which releases have it).

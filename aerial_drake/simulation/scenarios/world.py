@@ -17,6 +17,7 @@ from typing import Any
 from pydrake.multibody.parsing import ModelDirective, ModelDirectives
 from pydrake.multibody.plant import MultibodyPlant, MultibodyPlantConfig
 
+from aerial_drake import drake_compat
 from aerial_drake.robots.description import RobotDescription, RobotDescriptionError
 from aerial_drake.robots.environment import WorldError, environment_parser
 from aerial_drake.robots.models import add_aerial_manipulator
@@ -33,7 +34,8 @@ from aerial_drake.simulation.scenarios.checks import (
 #: The choices of MultibodyPlantConfig's text fields (Drake's documentation of the struct;
 #: tests/simulation/test_world.py holds them against Drake's own parser of each).
 CONTACT_MODELS = ("point", "hydroelastic", "hydroelastic_with_fallback")
-DISCRETE_CONTACT_APPROXIMATIONS = ("tamsi", "sap", "similar", "lagged")
+# The installed Drake release's choices (1.58 has no TAMSI): aerial_drake.drake_compat.
+DISCRETE_CONTACT_APPROXIMATIONS = drake_compat.DISCRETE_CONTACT_APPROXIMATIONS
 CONTACT_SURFACE_REPRESENTATIONS = ("triangle", "polygon")
 #: A discrete plant's step must divide the controller's period to this relative tolerance.
 _STEP_TOLERANCE = 1e-9
