@@ -5,7 +5,6 @@ the command line (issue 27), and the time limit leaves no timer or handler behin
 import signal
 import sys
 import textwrap
-import time
 
 import pytest
 
@@ -90,10 +89,8 @@ def test_the_command_line_exits_2_naming_the_function_and_its_error(user_module,
 
 def test_a_function_that_never_returns_at_t0_is_stopped(user_module, monkeypatch):
     monkeypatch.setattr(python_kind, "LOAD_TIME_LIMIT", 0.3)
-    start = time.monotonic()
-    with pytest.raises(ScenarioError) as err:
+    with pytest.raises(ScenarioError) as err:  # (it returns at all only through the limit)
         load_scenario(_scenario(user_module, "slow_paths:never_returns"))
-    assert time.monotonic() - start < 20.0
     message = str(err.value)
     assert err.value.field == "trajectory.python.function"
     assert "slow_paths:never_returns" in message and "did not return within 0.3 s" in message
