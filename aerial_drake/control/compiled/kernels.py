@@ -491,6 +491,27 @@ def _gain(gains, i, n):
     return gains[start:start + (n if _GAIN_SIZES[i] < 0 else _GAIN_SIZES[i])]
 
 
+@_inline
+def _end_effector_pose_into(R_WB, p_WB, R_BE, p_BE, R_WE, p_WE):
+    """X_WE = X_WB X_BE, the end-effector frame's pose from its body's (the law and the
+    tracking errors share it, so their poses are the same doubles)."""
+    _mm_into(R_WB, R_BE, R_WE)
+    _mv_into(R_WB, p_BE, p_WE)
+    for i in range(3):
+        p_WE[i] = p_WB[i] + p_WE[i]
+
+
+@_inline
+def _sigma_min_J3(J_y, T_inv, w):
+    """Assumption 1's margin sigma_min(J_3), J_3 the last n columns of J = J_y T^-1 (17);
+    leaves J (w.Jt) and J_3 (w.J3) in the workspace for the law."""
+    Jt, J3 = w.Jt, w.J3
+    _mm_into(J_y, T_inv, Jt)
+    _copy(Jt[:, 6:], J3)
+    _mtm_into(J3, J3, w.JtJ)
+    return math.sqrt(max(_min_eigenvalue_sym(w.JtJ, w.vn[13:17]), 0.0))
+
+
 #: The law's parameters (after the tree in the packed arrays, see CompiledLaw).
 _LawParams = namedtuple("_LawParams",
                         "nq ee_body nj rows joint_q joint_v R_BE p_BE gains limits")
@@ -715,17 +736,11 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
         if r >= 6:
             J_y[i, p.joint_v[r - 6]] = 1.0
     R_WE, p_WE = w.R_WE, w.p_WE
-    _mm_into(Ri, p.R_BE, R_WE)
-    _mv_into(Ri, p.p_BE, p_WE)
-    for i in range(3):
-        p_WE[i] = pi[i] + p_WE[i]
+    _end_effector_pose_into(Ri, pi, p.R_BE, p.p_BE, R_WE, p_WE)
 
     # Task control (17)-(20).
+    sigma_min = _sigma_min_J3(J_y, T_inv, w)
     Jt, J3 = w.Jt, w.J3
-    _mm_into(J_y, T_inv, Jt)
-    _copy(Jt[:, 6:], J3)
-    _mtm_into(J3, J3, w.JtJ)
-    sigma_min = math.sqrt(max(_min_eigenvalue_sym(w.JtJ, w.vn[13:17]), 0.0))
     if not sigma_min > p.limits[0]:
         return ASSUMPTION_1, f_d_norm, sigma_min
     R_err = w.R_err
@@ -898,16 +913,9 @@ def _tracking_row(x, com, task, heading, row, tree, p, s, w, n, nv):
         if r >= 6:
             J_y[i, p.joint_v[r - 6]] = 1.0
     R_WE, p_WE = w.R_WE, w.p_WE
-    _mm_into(Ri, p.R_BE, R_WE)
-    _mv_into(Ri, p.p_BE, p_WE)
-    for i in range(3):
-        p_WE[i] = pi[i] + p_WE[i]
-    # Assumption 1's margin: sigma_min(J3), J3 the last n columns of J_y T^-1.
-    Jt, J3 = w.Jt, w.J3
-    _mm_into(J_y, T_inv, Jt)
-    _copy(Jt[:, 6:], J3)
-    _mtm_into(J3, J3, w.JtJ)
-    sigma_min = math.sqrt(max(_min_eigenvalue_sym(w.JtJ, w.vn[13:17]), 0.0))
+    _end_effector_pose_into(Ri, pi, p.R_BE, p.p_BE, R_WE, p_WE)
+    # Assumption 1's margin.
+    sigma_min = _sigma_min_J3(J_y, T_inv, w)
     # The task error (17)-(18): rows of [p_E - p_ed; vee(skew(R_E R_ed^T)); q_j - q_jd].
     R_err, y_t, y6 = w.R_err, w.y_t[0], w.y6
     _mm_into(R_WE, task[3:12].reshape((3, 3)).T, R_err)
