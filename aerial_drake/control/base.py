@@ -35,7 +35,7 @@ from pydrake.common.value import AbstractValue
 from pydrake.multibody.plant import MultibodyPlant_
 from pydrake.systems.framework import Context_, LeafSystem_, ValueProducer
 
-from aerial_drake.control.law import AssumptionViolation
+from aerial_drake.control.law import AssumptionViolation, diagnostics_slices
 from aerial_drake.robots.task import TaskLayout
 from aerial_drake.trajectories.reference import (
     COM_REFERENCE_SIZE,
@@ -221,17 +221,15 @@ def _define(T):
 
 
 def _slices(layout: DiagnosticsLayout) -> dict[str, slice]:
-    """Name -> slice of each entry of ``layout``; a repeated name or a negative size is
-    refused."""
-    out, start = {}, 0
+    """Name -> slice of each entry of ``layout`` (:func:`aerial_drake.control.law.
+    diagnostics_slices`); a repeated name or a negative size is refused."""
+    names = [name for name, _ in layout]
     for name, size in layout:
-        if name in out or size < 0:
+        if names.count(name) > 1 or size < 0:
             raise ValueError(f"diagnostics_layout: entry ({name!r}, {size}) is repeated or "
                              "has a negative size; give each entry its own name and a size "
                              ">= 0")
-        out[name] = slice(start, start + size)
-        start += size
-    return out
+    return diagnostics_slices(list(layout))
 
 
 #: The base for scalar type ``T`` (float or AutoDiffXd): ``ControllerBase_[T]``.
