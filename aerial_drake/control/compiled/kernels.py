@@ -492,6 +492,18 @@ def _gain(gains, i, n):
 
 
 @_inline
+def _point_map_into(p_BE, hat, Pp):
+    """Pp = [-hat(p_BE), E]: a body's spatial velocity [w; v_Bo] (its frame) to the velocity
+    of the point p_BE on it (shared by the law and the tracking errors)."""
+    _hat_into(p_BE, hat)
+    _zero(Pp)
+    for i in range(3):
+        Pp[i, 3 + i] = 1.0
+        for j in range(3):
+            Pp[i, j] = -hat[i, j]
+
+
+@_inline
 def _end_effector_pose_into(R_WB, p_WB, R_BE, p_BE, R_WE, p_WE):
     """X_WE = X_WB X_BE, the end-effector frame's pose from its body's (the law and the
     tracking errors share it, so their poses are the same doubles)."""
@@ -702,13 +714,8 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
     Ji, Ji_dot = s.J[p.ee_body], s.J_dot[p.ee_body]
     w_i = w.w_i
     _mv_into(Ji[:3], v, w_i)
-    Pp = w.Pp  # [-hat(p_BE), E]
-    _hat_into(p.p_BE, w.hat)
-    _zero(Pp)
-    for i in range(3):
-        Pp[i, 3 + i] = 1.0
-        for j in range(3):
-            Pp[i, j] = -w.hat[i, j]
+    Pp = w.Pp
+    _point_map_into(p.p_BE, w.hat, Pp)
     top, top_dot, tmp = w.top[0], w.top[1], w.top[2]
     _mm_into(Pp, Ji, top)
     _mm_into(Pp, Ji_dot, top_dot)
@@ -895,13 +902,8 @@ def _tracking_row(x, com, task, heading, row, tree, p, s, w, n, nv):
         x_t_dot[i] = xi[i] - com[3 + i]
     # The end-effector frame's pose and World Jacobian [v_E; w_E], and the task's rows.
     Ri, pi, Ji = s.R_all[p.ee_body], s.p_all[p.ee_body], s.J[p.ee_body]
-    Pp = w.Pp  # [-hat(p_BE), E]
-    _hat_into(p.p_BE, w.hat)
-    _zero(Pp)
-    for i in range(3):
-        Pp[i, 3 + i] = 1.0
-        for j in range(3):
-            Pp[i, j] = -w.hat[i, j]
+    Pp = w.Pp
+    _point_map_into(p.p_BE, w.hat, Pp)
     top, J6, J_y = w.top[0], w.J6[0], w.J_y[0]
     _mm_into(Pp, Ji, top)
     _mm_into(Ri, top, J6[0:3])
