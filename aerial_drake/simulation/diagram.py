@@ -50,7 +50,11 @@ from aerial_drake.simulation.actuators import (
     lag_time_constant,
     make_base_actuator,
 )
-from aerial_drake.simulation.disturbances import add_wrench_source, resolve_random_disturbances
+from aerial_drake.simulation.disturbances import (
+    add_wrench_source,
+    bound_end_effector_windows,
+    resolve_random_disturbances,
+)
 from aerial_drake.simulation.scenarios import Scenario
 from aerial_drake.simulation.sensing import add_state_sensor
 from aerial_drake.simulation.wind import add_wind
@@ -77,6 +81,9 @@ class ClosedLoop:
     outputs: dict[str, OutputPort] = field(default_factory=dict)
     # The scenario's StateSensor between the plant and the controller (None without sensing).
     sensor: Any = None
+    # The scenario as simulated: its random windows drawn and its end-effector windows
+    # bounded (build_simulation; None from build_closed_loop, which adds no windows).
+    scenario: Scenario | None = None
 
     def input_port(self, name: str) -> InputPort:
         """The closed loop's input port ``name`` (``vehicle_wrench``, ...). The earlier name
@@ -371,6 +378,8 @@ def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = Non
     scenario = resolve_random_disturbances(scenario)
     loop = add_closed_loop(builder, scenario, controller_factory=controller_factory)
     sim = loop.simulated_plant
+    scenario = bound_end_effector_windows(scenario, loop.controller_model, loop.reference.source)
+    loop.scenario = scenario
     for target, port in (("vehicle", "vehicle_wrench"),
                          ("end_effector", "end_effector_wrench")):
         wrench = add_wrench_source(builder, scenario.disturbances, target).get_output_port()

@@ -19,6 +19,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.multibody.tree import (
     BodyIndex,
     ModelInstanceIndex,
+    RevoluteJoint,
     RigidBody,
     RotationalInertia,
     SpatialInertia,
@@ -28,6 +29,7 @@ from pydrake.systems.framework import Context
 from aerial_drake.robots.models import AerialManipulator
 from aerial_drake.simulation.diagram import ClosedLoop
 from aerial_drake.simulation.scenarios import Scenario
+from aerial_drake.simulation.scenarios.checks import check_body_names
 from aerial_drake.simulation.scenarios.perturbations import ModelMismatch, Payload
 
 
@@ -64,31 +66,86 @@ def radius_of_gyration(M_BBo_B: SpatialInertia) -> float:
 
 
 def apply_model_mismatch(mismatch: ModelMismatch, plant: MultibodyPlant, context: Context,
-                         exclude: Sequence[ModelInstanceIndex] = ()
-                         ) -> dict[str, dict[str, float]]:
-    """Set every massive body's inertial parameters in ``context`` (the simulated plant's) as
-    ``mismatch`` says; returns ``{body: {mass_factor, inertia_factor, com_shift_m}}`` drawn
-    (empty when the section is off: nothing is touched)."""
+                         exclude: Sequence[ModelInstanceIndex] = (),
+                         rotor_joints: Sequence[RevoluteJoint] = (),
+                         rotor_speed: float = 0.0) -> dict[str, dict[str, float]]:
+    """Set the inertial parameters in ``context`` (the simulated plant's) as ``mismatch`` says
+    (its docstring): the bodies it names, else every massive body; ``rotor_joints``' child
+    bodies never get a CoM error (balanced rotors), only the unbalance of
+    ``rotor_balance_grade`` at ``rotor_speed`` (rad/s). Returns ``{body: {mass_factor,
+    inertia_factor, com_shift_m}}`` (empty when the section is off: nothing is touched).
+
+    Raises ScenarioError naming ``model_mismatch.bodies`` for a name that is not one of the
+    plant's massive bodies (listing them)."""
     if not mismatch.active():
         return {}
+    bodies = massive_bodies(plant, context, exclude)
+    chosen = set(check_body_names(mismatch.bodies, [b.name() for b in bodies]))
+    unbalance = rotor_unbalance(mismatch, rotor_joints, rotor_speed)
     rng = np.random.default_rng(mismatch.seed)
     applied = {}
-    for body in massive_bodies(plant, context, exclude):
+    for body in bodies:
         M = body.CalcSpatialInertiaInBodyFrame(context)
-        # Draw all three for every body, whichever errors are on, so that turning one error
-        # off leaves the others' draws as they were.
+        # Draw all three for every body, whichever errors are on and whichever bodies are
+        # named, so that turning one error off (or naming fewer bodies) leaves the others'
+        # draws as they were.
         e_m, e_I = rng.uniform(-1.0, 1.0, size=2)
         d = rng.uniform(-1.0, 1.0, size=3)
-        mass_factor = mismatch.mass_scale * (1.0 + mismatch.mass_error * e_m)
-        inertia_factor = mismatch.inertia_scale * (1.0 + mismatch.inertia_error * e_I)
-        shift = (np.asarray(mismatch.com_offset, dtype=float)
-                 + mismatch.com_error * radius_of_gyration(M) * d)
+        named = body.name() in chosen and mismatch.body_errors()
+        # A rotor's CoM moves by its unbalance alone (its d drawn, not applied).
+        shift = unbalance.get(int(body.index()))
+        if not (named or (shift is not None and shift.any())):
+            continue
+        mass_factor, inertia_factor = 1.0, 1.0
+        if named:
+            mass_factor = mismatch.mass_scale * (1.0 + mismatch.mass_error * e_m)
+            inertia_factor = mismatch.inertia_scale * (1.0 + mismatch.inertia_error * e_I)
+        if shift is None:
+            shift = (np.asarray(mismatch.com_offset, dtype=float)
+                     + mismatch.com_error * radius_of_gyration(M) * d)
         body.SetSpatialInertiaInBodyFrame(
             context, perturbed_inertia(M, mass_factor, inertia_factor, shift))
         applied[body.name()] = {"mass_factor": float(mass_factor),
                                 "inertia_factor": float(inertia_factor),
                                 "com_shift_m": float(np.linalg.norm(shift))}
     return applied
+
+
+#: The second entry of the seed of the rotors' unbalance phases (``default_rng([seed, 1])``),
+#: a stream apart from the bodies' draws (``default_rng(seed)``).
+UNBALANCE_STREAM = 1
+
+
+def rotor_unbalance(mismatch: ModelMismatch, rotor_joints: Sequence[RevoluteJoint],
+                    rotor_speed: float) -> dict[int, np.ndarray]:
+    """The CoM shift of each rotor's child body (its body axes, m), by body index: the
+    permissible specific unbalance of ISO 21940-11, ``e = G / omega`` (G =
+    ``rotor_balance_grade`` in mm/s, omega = ``|rotor_speed|`` in rad/s), perpendicular to the
+    joint's axis at a phase uniform in [0, 2 pi) per rotor; zero shifts when G = 0."""
+    grade = mismatch.rotor_balance_grade
+    if grade > 0 and rotor_joints and rotor_speed == 0:  # (the validation refuses it)
+        raise ValueError("rotor_unbalance: a balance grade needs a rotor speed other than 0")
+    rng = np.random.default_rng([mismatch.seed, UNBALANCE_STREAM])
+    shifts = {}
+    for joint in rotor_joints:
+        phase = rng.uniform(0.0, 2.0 * np.pi)
+        if grade == 0:
+            shifts[int(joint.child_body().index())] = np.zeros(3)
+            continue
+        e = grade * 1e-3 / abs(rotor_speed)  # (mm/s) / (rad/s) = mm, in m
+        R_BM = joint.frame_on_child().GetFixedPoseInBodyFrame().rotation().matrix()
+        a = R_BM @ joint.revolute_axis()  # the spin axis in the rotor's body axes
+        u, v = _perpendicular_pair(a)
+        shifts[int(joint.child_body().index())] = e * (np.cos(phase) * u + np.sin(phase) * v)
+    return shifts
+
+
+def _perpendicular_pair(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit vectors perpendicular to the unit vector ``a`` and to each other."""
+    helper = np.eye(3)[int(np.argmin(np.abs(a)))]
+    u = np.cross(a, helper)
+    u /= np.linalg.norm(u)
+    return u, np.cross(a, u)
 
 
 def payload_inertia(payload: Payload, X_BE: RigidTransform) -> SpatialInertia:
@@ -118,7 +175,8 @@ def apply_plant_perturbations(scenario: Scenario, sim: AerialManipulator,
                               context: Context) -> None:
     """The scenario's model mismatch, then its payload (itself exact: it is what is held), on
     the simulated plant's ``context``."""
-    apply_model_mismatch(scenario.model_mismatch, sim.plant, context, sim.environment)
+    apply_model_mismatch(scenario.model_mismatch, sim.plant, context, sim.environment,
+                         sim.rotor_joints, scenario.rotors.speed)
     apply_payload(scenario.payload, sim, context)
 
 

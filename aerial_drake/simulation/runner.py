@@ -279,9 +279,10 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
                 before_start: Callable[[], None] | None,
                 extra_files: Callable[[], dict[str, str]] | None) -> RunResult:
     stream = stream if stream is not None else sys.stderr
+    builder, loop, loggers = build_simulation(scenario, controller_factory=controller_factory)
+    scenario = loop.scenario or scenario  # its end-effector windows bounded by the arm's hold
     if lock is not None:
         _note_replaced_results(scenario, lock.folder, stream)
-    builder, loop, loggers = build_simulation(scenario, controller_factory=controller_factory)
     check_reference(scenario, loop.controller_model, loop.reference.source)
     if getattr(loop.controller, "compiled", True) is False:
         # Said once: every valid description is compiled today (quaternion base, revolute

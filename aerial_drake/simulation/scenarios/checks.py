@@ -15,7 +15,8 @@ from typing import Any, NoReturn
 from aerial_drake.control.gains import show
 
 __all__ = ["ScenarioError", "Range", "RobotFacts", "show", "number", "vector", "flag", "text",
-           "is_number", "folder_name", "estimated_log_mb", "current_target"]
+           "is_number", "folder_name", "estimated_log_mb", "current_target",
+           "check_body_names"]
 
 #: Floats per logged sample, an upper bound over the plant variants (time, plant state,
 #: commands, diagnostics, references, rotor drive): what the log-size estimate multiplies.
@@ -145,6 +146,10 @@ SEED = Range(0, 2 ** 32 - 1, fix="any integer >= 0")
 TIME = Range(0.0, 86400.0, "s", fix="a window inside the run")
 MAGNITUDE = Range(0.0, 1e5, fix="the paper's windows are 40-50 N, 20 N m")
 COUNT = Range(0, 100, fix="0 turns the random windows off")
+BALANCE_GRADE = Range(0.0, 4000.0, "mm/s", fix="ISO 21940-11's grades run from G0.4 to G4000; "
+                      "G6.3 suits rotors of this kind; 0 turns the unbalance off")
+HOLD_FRACTION = Range(0.0, 1.0, fix="0.8 keeps each joint within 80 % of its torque limit; "
+                      "0 turns the bound off")
 #: The most disturbance windows a scenario holds (its own and random_disturbances.count): more
 #: would make the run's scenario.yaml larger than a scenario file may be (reading.py).
 MAX_WINDOWS = 1000
@@ -166,6 +171,19 @@ TRAJECTORY = {
 }
 #: Characters a run folder's name keeps; any other run of characters becomes "_".
 _UNSAFE = re.compile(r"[^A-Za-z0-9._-]+")
+
+
+def check_body_names(names: Any, available: list[str] | tuple[str, ...],
+                     field: str = "model_mismatch.bodies") -> list[str]:
+    """The bodies ``names`` asks for (empty: all of ``available``, the robot's bodies with
+    mass); raise ScenarioError naming ``field``, the value and the bodies there are."""
+    if not isinstance(names, (list, tuple)) or not all(isinstance(n, str) for n in names):
+        _fail(field, names, "a list of body names (empty: every body with mass)")
+    unknown = [n for n in names if n not in available]
+    if unknown:
+        raise _error(field, f"{field}: {show(unknown[0])} is not a body with mass of the "
+                            f"plant; its bodies with mass are {', '.join(available)}")
+    return list(names) if names else list(available)
 
 
 def folder_name(name: str) -> str:
@@ -192,6 +210,12 @@ class RobotFacts:
     rotor_variants: tuple[str, ...]  # the variants with rotor joints
     thrust: tuple[float, float]  # the robot's thrust range (N)
     joint_nominal: tuple[float, ...] = ()  # the task's joint components at the nominal posture
+    #: Names of the robot's bodies with mass, per plant variant (model_mismatch.bodies).
+    bodies: tuple[tuple[str, tuple[str, ...]], ...] = ()
+
+    def body_names(self, variant: str) -> tuple[str, ...]:
+        """The names of the robot's bodies with mass in plant ``variant`` (none if unknown)."""
+        return dict(self.bodies).get(variant, ())
 
 
 def current_target(value: Any, where: str) -> Any:

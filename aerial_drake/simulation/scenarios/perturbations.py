@@ -21,12 +21,25 @@ class ModelMismatch:
     """The simulated plant's inertial parameters set apart from the model's (the controller
     keeps the nominal model): per body, in the plant context's parameters.
 
-    Each body of the simulated plant (World excepted; bodies of zero mass kept at zero) gets
-    ``mass * mass_scale * (1 + e_m)``, its rotational inertia about its CoM times
-    ``inertia_scale * (1 + e_I)``, and its CoM moved by ``com_offset + d``, where ``e_m``,
-    ``e_I`` are uniform in +-``mass_error``, +-``inertia_error`` and ``d`` uniform per axis in
-    +-``com_error`` times the body's radius of gyration, drawn from ``default_rng(seed)`` in the
-    plant's body order.
+    Each body named in ``bodies`` (empty: every body of the simulated plant with mass, World
+    and the environment's excepted) gets ``mass * mass_scale * (1 + e_m)``, its rotational
+    inertia about its CoM times ``inertia_scale * (1 + e_I)``, and its CoM moved by
+    ``com_offset + d``, where ``e_m``, ``e_I`` are uniform in +-``mass_error``,
+    +-``inertia_error`` and ``d`` uniform per axis in +-``com_error`` times the body's radius
+    of gyration, drawn from ``default_rng(seed)`` for every body with mass in the plant's
+    body order (named or not, so a body's draw does not depend on which others are named).
+
+    Rotor bodies (the children of the plant variant's rotor joints) keep their CoM: a
+    spinning body's CoM off its axis is an unbalance, a force ``m e omega^2`` turning with the
+    rotor. ``com_error: 0.1`` on helicopter_lwr's 1.3 kg rotors (radius of gyration 305 mm)
+    moved them up to 30 mm per axis: at 81.7 rad/s about 200 N (up to 390 N) turning at
+    13 Hz, where a balanced rotor of that size is off by less than 0.1 mm (< 1 N). They keep
+    their mass and inertia errors (their ``d`` is drawn, not applied). A rotor's unbalance is
+    asked for by ``rotor_balance_grade`` instead: ISO 21940-11's balance grade G (mm/s), its
+    CoM moved by the permissible specific unbalance ``e = G / omega`` (``omega`` =
+    ``|rotors.speed|``) perpendicular to its spin axis, at a phase uniform in [0, 2 pi) drawn
+    from a stream of its own (``default_rng([seed, 1])``: the other draws are unchanged). It
+    needs a plant variant with rotor joints spinning (a scenario without is refused).
     """
 
     # Scale of every body's mass (1 = the model's).
@@ -41,10 +54,18 @@ class ModelMismatch:
     inertia_error: float = 0.0
     com_error: float = 0.0
     seed: int = 0
+    # The bodies (names) whose mass, inertia and CoM are wrong; empty = every body with mass.
+    bodies: list[str] = field(default_factory=list)
+    # ISO 21940-11 balance grade G of the rotors (mm/s; G6.3 is a typical rotor's); 0 = off.
+    rotor_balance_grade: float = 0.0
 
-    def active(self) -> bool:
+    def body_errors(self) -> bool:
+        """Whether the bodies' mass, inertia or CoM are changed (the unbalance aside)."""
         return (self.mass_scale != 1.0 or self.inertia_scale != 1.0 or any(self.com_offset)
                 or self.mass_error > 0 or self.inertia_error > 0 or self.com_error > 0)
+
+    def active(self) -> bool:
+        return self.body_errors() or self.rotor_balance_grade > 0
 
 
 @dataclass
@@ -124,6 +145,12 @@ class RandomDisturbances:
     and its torque each turned along a direction uniform on the sphere. Then ``count`` new
     windows on ``target``: start uniform in ``start``, length uniform in ``length``, force and
     torque magnitudes uniform in their ranges, each along its own uniform direction.
+
+    ``arm_hold_fraction`` (0 = off) bounds every window on the end effector (the scenario's
+    own, redirected or not, and the new ones) by what the arm can hold: its force and torque
+    scaled down by one factor ``s <= 1`` so that at the reference posture at the window's start
+    and at its end ``|tau_g,i + s (J^T w)_i| <= arm_hold_fraction * tau_max,i`` for every arm
+    joint ``i`` (:func:`aerial_drake.simulation.disturbances.bound_end_effector_windows`).
     """
 
     # Turn the scenario's own windows to random directions.
@@ -138,6 +165,9 @@ class RandomDisturbances:
     force: list[float] = field(default_factory=lambda: [0.0, 0.0])
     torque: list[float] = field(default_factory=lambda: [0.0, 0.0])
     seed: int = 0
+    # The share of each arm joint's torque limit that gravity and an end-effector window may
+    # take together (0 = no bound; 1 = the limit itself).
+    arm_hold_fraction: float = 0.0
 
     def __post_init__(self) -> None:
         self.target = current_target(self.target, "RandomDisturbances.target")

@@ -4,13 +4,15 @@ value checks need (sizes, variants, thrust range; its plant built once per descr
 from pathlib import Path
 from typing import Any
 
+from pydrake.multibody.tree import BodyIndex
+
 from aerial_drake.robots.description import (
     RobotDescription,
     RobotDescriptionError,
     load_robot_description,
     shipped_robots,
 )
-from aerial_drake.robots.models import make_plant
+from aerial_drake.robots.models import AerialManipulator, make_plant
 from aerial_drake.simulation.scenarios.checks import RobotFacts, ScenarioError
 
 
@@ -50,8 +52,11 @@ def robot_facts(scenario: Any) -> RobotFacts:
         try:
             model = make_plant(robot=description)
             rotor_variants = tuple(v.name for v in description.variants if v.rotor_joints)
+            bodies = [(description.variant_names()[0], _massive_body_names(model))]
             for variant in description.variant_names()[1:]:
-                make_plant(variant, robot=description)  # its checks, before any run
+                # Its checks, before any run.
+                bodies.append((variant, _massive_body_names(make_plant(variant,
+                                                                       robot=description))))
         except RobotDescriptionError as err:
             raise ScenarioError(f"robot: {err}", f"robot: {err.field}") from None
         assert model.task is not None
@@ -59,5 +64,13 @@ def robot_facts(scenario: Any) -> RobotFacts:
                                  variants=description.variant_names(),
                                  rotor_variants=rotor_variants,
                                  thrust=model.thrust_limits(),
-                                 joint_nominal=tuple(model.task_joint_nominal()))
+                                 joint_nominal=tuple(model.task_joint_nominal()),
+                                 bodies=tuple(bodies))
     return _FACTS[key]
+
+
+def _massive_body_names(model: AerialManipulator) -> tuple[str, ...]:
+    """The names of ``model``'s bodies with mass (World has none), in index order."""
+    plant = model.plant
+    return tuple(plant.get_body(BodyIndex(i)).name() for i in range(1, plant.num_bodies())
+                 if plant.get_body(BodyIndex(i)).default_mass() > 0)

@@ -26,6 +26,7 @@ from aerial_drake.simulation.scenarios.checks import (
     ACCURACY,
     AIRSPEED,
     ANGLE_OFFSET,
+    BALANCE_GRADE,
     BODY_TORQUE,
     COUNT,
     DELAY,
@@ -35,6 +36,7 @@ from aerial_drake.simulation.scenarios.checks import (
     DURATION,
     F_D_LIMIT,
     FORCE,
+    HOLD_FRACTION,
     INERTIA,
     JOINT_TARGET,
     LAG,
@@ -71,6 +73,7 @@ from aerial_drake.simulation.scenarios.checks import (
     ScenarioError,
     _error,
     _fail,
+    check_body_names,
     estimated_log_mb,
     flag,
     folder_name,
@@ -98,7 +101,7 @@ def validate_scenario(s: Any) -> None:
     check_values(s, facts)
     check_trajectory(s, np.array(facts.joint_nominal))
     _check_controller(s.controller)
-    check_perturbations(s)
+    check_perturbations(s, facts)
     check_world(s)
 
 
@@ -276,16 +279,10 @@ def _interval(name: str, value: Any, allowed: Range) -> None:
         _fail(name, value, "[low, high] with low <= high")
 
 
-def check_perturbations(s: Any) -> None:
-    """Check the perturbation sections of scenario ``s``; raise ScenarioError naming the
-    field, the value and the fix."""
-    m = s.model_mismatch
-    number("model_mismatch.mass_scale", m.mass_scale, SCALE)
-    number("model_mismatch.inertia_scale", m.inertia_scale, SCALE)
-    vector("model_mismatch.com_offset", m.com_offset, 3, OFFSET)
-    for name in ("mass_error", "inertia_error", "com_error"):
-        number(f"model_mismatch.{name}", getattr(m, name), RELATIVE)
-    _seed("model_mismatch.seed", m.seed)
+def check_perturbations(s: Any, robot: RobotFacts) -> None:
+    """Check the perturbation sections of scenario ``s`` for its ``robot``; raise
+    ScenarioError naming the field, the value and the fix."""
+    _check_mismatch(s, robot)
     p = s.payload
     number("payload.mass", p.mass, MASS)
     vector("payload.inertia", p.inertia, 3, INERTIA)
@@ -307,6 +304,34 @@ def check_perturbations(s: Any) -> None:
         _fail("random_disturbances.length", r.length, "a low end > 0 s (a window is [start, "
               "stop) with stop > start)")
     _seed("random_disturbances.seed", r.seed)
+    number("random_disturbances.arm_hold_fraction", r.arm_hold_fraction, HOLD_FRACTION)
+
+
+def _check_mismatch(s: Any, robot: RobotFacts) -> None:
+    m = s.model_mismatch
+    number("model_mismatch.mass_scale", m.mass_scale, SCALE)
+    number("model_mismatch.inertia_scale", m.inertia_scale, SCALE)
+    vector("model_mismatch.com_offset", m.com_offset, 3, OFFSET)
+    for name in ("mass_error", "inertia_error", "com_error"):
+        number(f"model_mismatch.{name}", getattr(m, name), RELATIVE)
+    _seed("model_mismatch.seed", m.seed)
+    check_body_names(m.bodies, robot.body_names(s.plant_variant))
+    grade = number("model_mismatch.rotor_balance_grade", m.rotor_balance_grade, BALANCE_GRADE)
+    if grade == 0:
+        return
+    if s.plant_variant not in robot.rotor_variants:
+        variants = ", ".join(robot.rotor_variants)
+        raise ScenarioError(
+            f"model_mismatch.rotor_balance_grade = {grade:g} mm/s is a rotor unbalance, and "
+            f"plant_variant '{s.plant_variant}' has no rotor joints: "
+            + (f"use a variant with rotors ({variants})" if variants else
+               "this robot has no variant with rotors") + " or remove rotor_balance_grade",
+            "model_mismatch.rotor_balance_grade")
+    if s.rotors.speed == 0:
+        raise ScenarioError(
+            f"model_mismatch.rotor_balance_grade = {grade:g} mm/s: the unbalance e = G / omega "
+            "needs the rotors' speed, and rotors.speed is 0: set rotors.speed or remove "
+            "rotor_balance_grade", "model_mismatch.rotor_balance_grade")
 
 
 def _check_wind(w: Any) -> None:
