@@ -6,7 +6,9 @@ The inertial parameters are changed in the *simulated* plant's context only (Dra
 body's mass, CoM and inertia as parameters of the context: no second model file); the
 controller's own model (``ClosedLoop.controller_model``) keeps its nominal values, so the
 controller is wrong by exactly the drawn amounts. Bodies come from the plant itself, so any
-robot description gets the same treatment.
+robot description gets the same treatment; the rotor bodies (children of the plant's rotor
+joints) keep their CoM, and get an unbalance only when ``rotor_balance_grade`` asks for one
+(:class:`~aerial_drake.simulation.scenarios.perturbations.ModelMismatch` says why).
 """
 
 from __future__ import annotations

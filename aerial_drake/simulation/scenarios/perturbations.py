@@ -139,7 +139,8 @@ class Sensing:
 class RandomDisturbances:
     """Random disturbance windows, drawn from ``default_rng(seed)`` before the run (the drawn
     windows replace this section's effect in the run's scenario.yaml: ``disturbances`` holds
-    them, ``count`` and ``redirect`` are reset).
+    them as they acted, bounded, ``count`` and ``redirect`` are reset, ``arm_hold_fraction``
+    kept: its windows are within it, so bounding them again changes nothing).
 
     ``redirect``: each of the scenario's own windows keeps its timing and magnitudes, its force
     and its torque each turned along a direction uniform on the sphere. Then ``count`` new
