@@ -81,8 +81,7 @@ class ClosedLoop:
     outputs: dict[str, OutputPort] = field(default_factory=dict)
     # The scenario's StateSensor between the plant and the controller (None without sensing).
     sensor: Any = None
-    # The scenario as simulated: its random windows drawn and its end-effector windows
-    # bounded (build_simulation; None from build_closed_loop, which adds no windows).
+    # The scenario as simulated, windows drawn and bounded (build_simulation; else None).
     scenario: Scenario | None = None
 
     def input_port(self, name: str) -> InputPort:
