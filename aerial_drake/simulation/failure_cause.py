@@ -38,6 +38,7 @@ the cause (None where not computed: a log too short, a quantity not logged).
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import numpy as np
@@ -73,10 +74,10 @@ STEADY_SHARE = 0.9
 STRETCHED = 0.99
 
 
-def classify_failure(failure: str | None, *, t: np.ndarray, applied: np.ndarray, lower: np.ndarray, upper: np.ndarray,
-                     names: tuple[str, ...], sigma_min_J3: np.ndarray | None = None,
-                     sigma_limit: float = 1e-3, stretch: float | None = None,
-                     ) -> dict[str, Any] | None:
+def classify_failure(failure: str | None, *, t: np.ndarray, applied: np.ndarray,
+                     lower: np.ndarray, upper: np.ndarray, names: tuple[str, ...],
+                     sigma_min_J3: np.ndarray | None = None, sigma_limit: float = 1e-3,
+                     stretch: float | None = None) -> dict[str, Any] | None:
     """The cause of a failed run (module docstring), or None if ``failure`` is None.
 
     Args:
@@ -87,12 +88,17 @@ def classify_failure(failure: str | None, *, t: np.ndarray, applied: np.ndarray,
         sigma_min_J3: (N) Assumption 1's margin at each sample (None: not logged);
             sigma_limit: the scenario's threshold of it.
         stretch: :func:`arm_stretch` at the failure (None: not known).
+
+    The result's ``time_s`` is the failure's time: the message's "t = ... s", else the last
+    sample's (None without either).
     """
     if failure is None:
         return None
     message = str(failure)
     t = np.asarray(t, dtype=float)
-    figures: dict[str, Any] = {"time_s": float(t[-1]) if t.size else None}
+    stated = re.search(r"t = ([-+0-9.eE]+) s", message)  # the runner's "t = 12.3456 s: ..."
+    figures: dict[str, Any] = {"time_s": float(stated.group(1)) if stated else
+                               float(t[-1]) if t.size else None}
     if message.startswith("interrupted") or ": interrupted (" in message:
         return _result("interrupted", "a signal stopped the run", figures)
     if "joint limit: " in message:
@@ -131,7 +137,7 @@ def classify_failure(failure: str | None, *, t: np.ndarray, applied: np.ndarray,
 
 def _result(cause: str, detail: str, figures: dict[str, Any]) -> dict[str, Any]:
     at = figures.get("time_s")
-    when = f"t = {at:.3f} s: " if at is not None else ""
+    when = f"t = {at:.4f} s: " if at is not None else ""
     return {"cause": cause, "detail": f"{cause} ({when}{detail})", **figures}
 
 
@@ -210,8 +216,9 @@ def _steadiness(t: np.ndarray, sigma: np.ndarray | None, stretch: float | None
 
 
 def arm_stretch(model: Any, q: np.ndarray) -> float:
-    """How stretched the arm of ``model`` (an :class:`~aerial_drake.robots.models.AerialManipulator`)
-    is at the positions ``q`` of its plant: over the sub-chains of the arm's joint origins and
+    """How stretched the arm of ``model`` (an
+    :class:`~aerial_drake.robots.models.AerialManipulator`) is at the positions ``q`` of its
+    plant: over the sub-chains of the arm's joint origins and
     the end effector that span at least half the arm's length (the summed distances between
     successive points), the largest ratio of the sub-chain's end-to-end distance to that
     distance at q = 0 (all arm angles zero: the arm straight for the LWR and the UR arms).

@@ -176,5 +176,5 @@ def failure_cause(scenario: Scenario, loop: ClosedLoop, log: dict[str, np.ndarra
         stretch = arm_stretch(model, x[:model.plant.num_positions()])
     return classify_failure(
         failure, t=log["t"], applied=log["applied_command"], lower=lower, upper=upper,
-        names=input_names(model.n), sigma_min_J3=named.get("sigma_min_J3"), sigma_limit=scenario.sigma_min_J3_limit,
-        stretch=stretch)
+        names=input_names(model.n), sigma_min_J3=named.get("sigma_min_J3"),
+        sigma_limit=scenario.sigma_min_J3_limit, stretch=stretch)

@@ -25,8 +25,8 @@ def hover_log(duration=3.0, dt=1e-3):
 def classify(message, t, command, sigma=None, stretch=0.8):
     """The cause of a log whose inputs are ``command`` applied (clipped at the limits)."""
     return dut.classify_failure(
-        message, t=t, applied=np.clip(command, LOWER, UPPER), lower=LOWER, upper=UPPER, names=NAMES, sigma_min_J3=sigma, sigma_limit=1e-3,
-        stretch=stretch)
+        message, t=t, applied=np.clip(command, LOWER, UPPER), lower=LOWER, upper=UPPER,
+        names=NAMES, sigma_min_J3=sigma, sigma_limit=1e-3, stretch=stretch)
 
 
 def test_a_completed_run_has_no_cause():
@@ -61,7 +61,7 @@ def test_a_large_single_frequency_is_an_oscillation_naming_it():
     t, command, sigma = hover_log()
     command[:, 2] += 100 * np.sin(2 * np.pi * 13 * t)  # mu_y: RMS 71 N m, 0.35 of 200 N m
     found = classify(A1, t, command, sigma=sigma)
-    assert found["cause"] == "oscillation"
+    assert found["cause"] == "oscillation" and found["time_s"] == 3.0
     assert found["dominant_frequency_hz"] == pytest.approx(13.0, abs=0.5)
     assert found["oscillation_input"] == "mu_y"
     assert found["oscillation_amplitude_ratio"] == pytest.approx(100 / np.sqrt(2) / 200,
@@ -144,7 +144,8 @@ def test_an_empty_log_is_classified_by_its_message():
     empty = np.zeros((0, 11))
     found = classify("t = 0.0000 s: joint limit: lwr_joint_2 ...", np.zeros(0), empty,
                      sigma=np.zeros(0))
-    assert found["cause"] == "joint_limit" and found["time_s"] is None
+    assert found["cause"] == "joint_limit" and found["time_s"] == 0.0
+    assert classify("a reason without a time", np.zeros(0), empty)["time_s"] is None
     assert classify(A1, np.zeros(0), empty, sigma=np.zeros(0))["cause"] == "other"
 
 
