@@ -11,8 +11,8 @@ errors' sigma_min(J_3)), the input limits and the arm's stretch at the failure
 2. ``joint_limit``: the message names a joint limit ("joint limit: ").
 3. ``divergence``: a signal became non-finite (the runner's "first non-finite signal", the
    controller's "not finite", Drake's "NaN").
-4. ``reach``: an Assumption 1 stop with the arm stretched, :data:`STRETCHED` or more of its
-   length at q = 0 along a sub-chain spanning half the arm (:func:`arm_stretch`), reached by a
+4. ``reach``: an Assumption 1 stop with the arm stretched, its elbow's span :data:`STRETCHED`
+   or more of its largest (:func:`arm_stretch`), reached by a
    steady fall of sigma_min(J_3): at least :data:`STEADY_SHARE` of its steps over the last
    :data:`STEADY_WINDOW_S` decreasing. The task pulled the arm straight (the elbow under a push
    that moves the CoM away from the end effector), not a shake through a singular posture.
@@ -69,8 +69,8 @@ STEADY_WINDOW_S = 0.3
 #: Share of sigma_min(J_3)'s steps that decrease over that window for a steady fall (a shake
 #: at 13 Hz makes about 65 %; a stretching arm 100 %).
 STEADY_SHARE = 0.9
-#: Stretch (a sub-chain's end-to-end distance over its distance at q = 0) for "stretched":
-#: 0.99 is an elbow within 16 degrees of straight between two equal links (cos 8 deg).
+#: Stretch (:func:`arm_stretch`: the elbow's span over its largest) for "stretched": 0.99 is
+#: an elbow within 16 degrees of straight between two equal links (cos 8 deg).
 STRETCHED = 0.99
 
 
@@ -115,7 +115,7 @@ def classify_failure(failure: str | None, *, t: np.ndarray, applied: np.ndarray,
             and figures["arm_stretch"] >= STRETCHED
             and (figures["sigma_steady_share"] or 0.0) >= STEADY_SHARE):
         return _result("reach", (
-            f"the arm stretched to {figures['arm_stretch']:.3f} of its length at q = 0 as "
+            f"the arm stretched, its elbow's span {figures['arm_stretch']:.3f} of its largest, as "
             f"sigma_min(J_3) fell steadily to the limit {sigma_limit:g} "
             f"({100 * figures['sigma_steady_share']:.0f} % of the last {STEADY_WINDOW_S:g} s' "
             "steps decreasing)"), figures)
@@ -215,32 +215,46 @@ def _steadiness(t: np.ndarray, sigma: np.ndarray | None, stretch: float | None
     return out
 
 
-def arm_stretch(model: Any, q: np.ndarray) -> float:
-    """How stretched the arm of ``model`` (an
+def arm_stretch(model: Any, q: np.ndarray) -> float | None:
+    """How straight the elbow of ``model``'s arm (an
     :class:`~aerial_drake.robots.models.AerialManipulator`) is at the positions ``q`` of its
-    plant: over the sub-chains of the arm's joint origins and
-    the end effector that span at least half the arm's length (the summed distances between
-    successive points), the largest ratio of the sub-chain's end-to-end distance to that
-    distance at q = 0 (all arm angles zero: the arm straight for the LWR and the UR arms).
-    1 is as stretched as at q = 0; the wrist alone (a short sub-chain) does not count."""
+    plant, 1 fully stretched; None for an arm without two links.
+
+    The points are the arm joints' origins then the end effector's; the links, the distances
+    between successive points (fixed by the model). The elbow is the pair of successive
+    non-zero links with the largest summed length, the upper arm and the forearm (the LWR's
+    0.40 and 0.39 m, the UR3e's 0.24 and 0.21 m): the stretch is the distance between their
+    far ends over its largest value as the joints between them turn (each swept over a full
+    turn, twice in turn), so 1 whatever offsets the arm's links have."""
     plant = model.plant
     context = plant.CreateDefaultContext()
+    frames = [j.frame_on_child() for j in model.arm_joints] + [model.end_effector_frame]
+    positions = np.array(q, dtype=float)
+    plant.SetPositions(context, positions)
+    points = np.array([f.CalcPoseInWorld(context).translation() for f in frames])
+    links = np.linalg.norm(np.diff(points, axis=0), axis=1)
+    solid = [k for k, length in enumerate(links) if length > 1e-6]  # link k: point k to k+1
+    pairs = [(k, m) for k, m in zip(solid[:-1], solid[1:])]
+    if not pairs:
+        return None
+    first, second = max(pairs, key=lambda pair: links[pair[0]] + links[pair[1]])
+    a, b = frames[first], frames[second + 1]
 
-    def points(arm: np.ndarray) -> np.ndarray:
-        positions = np.array(q, dtype=float)
-        positions[model.arm_position_indices] = arm
-        plant.SetPositions(context, positions)
-        frames = [j.frame_on_child() for j in model.arm_joints] + [model.end_effector_frame]
-        return np.array([f.CalcPoseInWorld(context).translation() for f in frames])
+    def span(values: np.ndarray) -> float:
+        plant.SetPositions(context, values)
+        return float(np.linalg.norm(b.CalcPoseInWorld(context).translation()
+                                    - a.CalcPoseInWorld(context).translation()))
 
-    now = points(np.asarray(q, dtype=float)[model.arm_position_indices])
-    straight = points(np.zeros(model.n))
-    links = np.linalg.norm(np.diff(straight, axis=0), axis=1)
-    along = np.concatenate([[0.0], np.cumsum(links)])
-    best = 0.0
-    for i in range(len(now)):
-        for j in range(i + 1, len(now)):
-            full = float(np.linalg.norm(straight[j] - straight[i]))
-            if along[j] - along[i] >= 0.5 * along[-1] and full > 0.0:
-                best = max(best, float(np.linalg.norm(now[j] - now[i])) / full)
-    return best
+    now = span(positions)
+    # The joints whose angles change that distance: those strictly between the two ends.
+    bends = [model.arm_position_indices[k] for k in range(first + 1, second + 1)]
+    widest, best = positions.copy(), now
+    for _ in range(2 if len(bends) > 1 else 1):
+        for index in bends:
+            for angle in np.linspace(-np.pi, np.pi, 361):
+                trial = widest.copy()
+                trial[index] = angle
+                length = span(trial)
+                if length > best:
+                    widest, best = trial, length
+    return now / best if best > 0 else None

@@ -149,27 +149,35 @@ def test_an_empty_log_is_classified_by_its_message():
     assert classify(A1, np.zeros(0), empty, sigma=np.zeros(0))["cause"] == "other"
 
 
-@pytest.fixture(scope="module")
-def lwr():
-    from aerial_drake.robots.models import make_plant, set_nominal_posture
-    model = make_plant()
+@pytest.fixture(scope="module", params=["nominal", "quadrotor_ur3e"])
+def arm(request):
+    """The controller's model of a shipped scenario's robot at its nominal posture, and the
+    index of its elbow joint (the LWR's joint 4, the UR3e's joint 3)."""
+    from aerial_drake.robots.models import set_nominal_posture
+    from aerial_drake.simulation.diagram import build_simulation
+    from aerial_drake.simulation.scenarios import load_scenario
+    _, loop, _ = build_simulation(load_scenario(request.param))
+    model = loop.controller_model
     context = model.plant.CreateDefaultContext()
     set_nominal_posture(model, context)
-    return model, model.plant.GetPositions(context)
+    elbow = {"nominal": 3, "quadrotor_ur3e": 2}[request.param]
+    return model, model.plant.GetPositions(context), elbow
 
 
-def test_arm_stretch_of_the_lwr(lwr):
-    model, q = lwr
-    nominal = dut.arm_stretch(model, q)
-    assert nominal < 0.9  # the hover posture: elbow bent
-    straight = q.copy()
-    straight[model.arm_position_indices] = 0.0
-    assert dut.arm_stretch(model, straight) == pytest.approx(1.0, abs=1e-12)
-    # The elbow (joint 4) straightened, the shoulder and the wrist left bent: stretched.
-    elbow = q.copy()
-    elbow[model.arm_position_indices[3]] = 0.0
-    assert dut.arm_stretch(model, elbow) == pytest.approx(1.0, abs=1e-9)
-    # The wrist (joint 6) alone straightened: a short sub-chain, not the arm stretched.
-    wrist = q.copy()
-    wrist[model.arm_position_indices[5]] = 0.0
-    assert dut.arm_stretch(model, wrist) < dut.STRETCHED
+def test_arm_stretch_is_the_elbows(arm):
+    model, q, elbow = arm
+    assert dut.arm_stretch(model, q) < 0.7  # the hover posture: elbow bent
+    for joint in range(model.n):
+        bent = q.copy()
+        bent[model.arm_position_indices[joint]] = 0.0
+        stretch = dut.arm_stretch(model, bent)
+        if joint == elbow:  # straightened: as stretched as it goes
+            assert stretch == pytest.approx(1.0, abs=1e-9)
+        else:  # another joint (the shoulder, the wrist) leaves the elbow as it was
+            assert stretch == pytest.approx(dut.arm_stretch(model, q), abs=1e-9)
+    # Bent 20 degrees: below the threshold (the span cos 10 deg = 0.985 of its largest for
+    # equal links); 5 degrees: above it (cos 2.5 deg = 0.999).
+    for degrees, stretched in ((20.0, False), (5.0, True)):
+        near = q.copy()
+        near[model.arm_position_indices[elbow]] = np.radians(degrees)
+        assert (dut.arm_stretch(model, near) >= dut.STRETCHED) is stretched
