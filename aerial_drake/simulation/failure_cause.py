@@ -11,10 +11,10 @@ errors' sigma_min(J_3)), the input limits and the arm's stretch at the failure
 2. ``joint_limit``: the message names a joint limit ("joint limit: ").
 3. ``divergence``: a signal became non-finite (the runner's "first non-finite signal", the
    controller's "not finite", Drake's "NaN").
-4. ``reach``: an Assumption 1 stop with the arm stretched, its elbow's span :data:`STRETCHED`
-   or more of its largest (:func:`arm_stretch`), reached by a
-   steady fall of sigma_min(J_3): at least :data:`STEADY_SHARE` of its steps over the last
-   :data:`STEADY_WINDOW_S` decreasing. The task pulled the arm straight (the elbow under a push
+4. ``reach``: a singular-Jacobian stop (Assumption 1, or a baseline's "task Jacobian is
+   singular") with the arm stretched, its elbow's span :data:`STRETCHED` or more of its
+   largest (:func:`arm_stretch`), reached by a steady fall of sigma_min(J_3): at least
+   :data:`STEADY_SHARE` of its steps over the last :data:`STEADY_WINDOW_S` decreasing. The task pulled the arm straight (the elbow under a push
    that moves the CoM away from the end effector), not a shake through a singular posture.
 5. ``oscillation``: over the last :data:`OSCILLATION_WINDOW_S`, one frequency of at least
    :data:`OSCILLATION_MIN_HZ` carries :data:`PEAK_SHARE` or more of an applied input's
@@ -46,7 +46,7 @@ import numpy as np
 CAUSES = ("joint_limit", "divergence", "torque_saturation", "reach", "oscillation",
           "interrupted", "other")
 
-#: Inputs at a limit for this share of the window count as saturated: more than half the
+#: Inputs at a limit for this share of the window or more count as saturated: half the
 #: time, so a limit touched by an oscillation's peaks alone does not count.
 SATURATED_SHARE = 0.5
 #: The window before the failure over which saturation is measured (s): the last half second,
@@ -111,7 +111,7 @@ def classify_failure(failure: str | None, *, t: np.ndarray, applied: np.ndarray,
     figures.update(_steadiness(t, sigma_min_J3, stretch))
     figures.update(_oscillation(t, applied, upper - lower, names))
     figures.update(_saturation(t, applied, lower, upper, names))
-    if ("Assumption 1" in message and figures["arm_stretch"] is not None
+    if (singular_stop(message) and figures["arm_stretch"] is not None
             and figures["arm_stretch"] >= STRETCHED
             and (figures["sigma_steady_share"] or 0.0) >= STEADY_SHARE):
         return _result("reach", (
@@ -133,6 +133,12 @@ def classify_failure(failure: str | None, *, t: np.ndarray, applied: np.ndarray,
             "the time"), figures)
     return _result("other", "no joint limit, divergence, stretched arm, oscillation or "
                             "saturation found in the log", figures)
+
+
+def singular_stop(message: str) -> bool:
+    """Whether a failure message is a singular task Jacobian's stop: the paper law's
+    Assumption 1 ("J_3 is singular") or a baseline's ("task Jacobian is singular")."""
+    return "Assumption 1" in message or "is singular" in message
 
 
 def _result(cause: str, detail: str, figures: dict[str, Any]) -> dict[str, Any]:

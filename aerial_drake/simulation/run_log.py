@@ -14,7 +14,7 @@ from pydrake.systems.primitives import VectorLogSink
 
 from aerial_drake.control.law import AssumptionViolation, diagnostics_layout
 from aerial_drake.simulation.diagram import ClosedLoop, input_limits
-from aerial_drake.simulation.failure_cause import arm_stretch, classify_failure
+from aerial_drake.simulation.failure_cause import arm_stretch, classify_failure, singular_stop
 from aerial_drake.simulation.metrics import (
     compute_metrics,
     disturbance_response,
@@ -161,8 +161,8 @@ def failure_cause(scenario: Scenario, loop: ClosedLoop, log: dict[str, np.ndarra
                   named: dict[str, np.ndarray], failure: str | None) -> dict | None:
     """:func:`aerial_drake.simulation.failure_cause.classify_failure` of a run's log: the
     inputs against the actuators' ratings (the limits the run saturates at, or would with
-    ``actuation.saturate``), the arm's stretch at the last logged state (Assumption 1 stops
-    only: the one posture it needs)."""
+    ``actuation.saturate``), the arm's stretch at the last logged state (singular-Jacobian
+    stops only: the one posture it needs)."""
     if failure is None:
         return None
     model = loop.controller_model
@@ -172,7 +172,7 @@ def failure_cause(scenario: Scenario, loop: ClosedLoop, log: dict[str, np.ndarra
     stretch = None
     x = log["plant_state"][-1][loop.simulated_plant.rigid_state_indices] if len(log["t"]) \
         else None
-    if "Assumption 1" in failure and x is not None and np.all(np.isfinite(x)):
+    if singular_stop(failure) and x is not None and np.all(np.isfinite(x)):
         stretch = arm_stretch(model, x[:model.plant.num_positions()])
     return classify_failure(
         failure, t=log["t"], applied=log["applied_command"], lower=lower, upper=upper,

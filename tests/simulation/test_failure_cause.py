@@ -118,6 +118,11 @@ def test_reach_needs_the_arm_stretched_and_the_fall_steady():
     shaken = steady_fall(t, sigma) + 0.02 * np.sin(2 * np.pi * 13 * t)
     found = classify(A1, t, command, sigma=shaken, stretch=0.9999)
     assert found["cause"] == "other" and found["sigma_steady_share"] < dut.STEADY_SHARE
+    # A baseline's singular task Jacobian is read as Assumption 1 is.
+    baseline = ("t = 3.0000 s: the arm's fixed-base task Jacobian is singular, sigma_min = "
+                "0.0009 (limit 0.001)")
+    assert classify(baseline, t, command, sigma=steady_fall(t, sigma), stretch=0.9999)[
+        "cause"] == "reach"
     # Not an Assumption 1 stop: the stretch is not its cause.
     a2 = "t = 3.0000 s: Assumption 2 violated: the desired thrust vanishes, |f_d| = 0.5 N"
     assert classify(a2, t, command, sigma=steady_fall(t, sigma), stretch=0.9999)["cause"] == \
