@@ -14,8 +14,9 @@ errors' sigma_min(J_3)), the input limits and the arm's stretch at the failure
 4. ``reach``: a singular-Jacobian stop (Assumption 1, or a baseline's "task Jacobian is
    singular") with the arm stretched, its elbow's span :data:`STRETCHED` or more of its
    largest (:func:`arm_stretch`), reached by a steady fall of sigma_min(J_3): at least
-   :data:`STEADY_SHARE` of its steps over the last :data:`STEADY_WINDOW_S` decreasing. The task pulled the arm straight (the elbow under a push
-   that moves the CoM away from the end effector), not a shake through a singular posture.
+   :data:`STEADY_SHARE` of its steps over the last :data:`STEADY_WINDOW_S` decreasing. The
+   task pulled the arm straight (the elbow under a push that moves the CoM away from the end
+   effector), not a shake through a singular posture.
 5. ``oscillation``: over the last :data:`OSCILLATION_WINDOW_S`, one frequency of at least
    :data:`OSCILLATION_MIN_HZ` carries :data:`PEAK_SHARE` or more of an applied input's
    detrended power (Hann-windowed FFT, the peak's bin and two either side), with an RMS of at
