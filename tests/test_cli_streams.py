@@ -62,3 +62,17 @@ def test_json_stdout_of_run_paper_is_one_document(tmp_path, capsys):
     assert set(runs) == {"nominal", "disturbed"}
     assert all(m["simulated_time_s"] == 0.05 for m in runs.values())
     assert "nominal" in err and "disturbed" in err  # the table, on stderr
+
+
+def test_a_failed_run_says_its_cause(tmp_path, capsys, monkeypatch):
+    # Assumption 1's threshold raised to stop a calm run at about 0.135 s (the check of the
+    # whole reference, which would refuse it before simulating, bypassed): the error names
+    # the assumption, the note its cause from the log (docs/reliability.md) and the folder.
+    monkeypatch.setattr("aerial_drake.simulation.runner.check_reference", lambda *a: None)
+    status = cli.main(["run", "nominal", "--out", str(tmp_path), "--json", "--no-plots",
+                       "--duration", "0.2", "--set", "sigma_min_J3_limit=0.2", "--quiet"])
+    out, err = capsys.readouterr()
+    assert status == 1
+    note = json.loads(out)["error"]["note"]
+    assert note.startswith("cause: other (t = 0.1350 s: no joint limit") and "logs up to" in note
+    assert "cause: other" in err

@@ -2,7 +2,8 @@
 
     python tools/study_report.py OUT/studies/NAME/results.csv [--study NAME]
 
-Prints the success rate, the failure reasons, the per-phase distributions (median, 90th
+Prints the success rate, the failure reasons, the failures counted by cause (the table's
+``failure_cause`` column, where it has one), the per-phase distributions (median, 90th
 percentile, max) of the end-effector and CoM errors of completed runs, the worst runs with
 their seeds (and the command that reproduces each), and for a two-parameter grid the maps of
 stability and peak errors as tables. With ``--study`` (a study with ``random_disturbances``
@@ -56,7 +57,7 @@ def report(path: Path, study: str | None) -> str:
     if failed_at:
         lines.append("- failure times (s, whole seconds: runs): " + ", ".join(
             f"{t}: {n}" for t, n in sorted(failed_at.items())))
-    lines.append("")
+    lines += ["", *_causes(rows)]
     ee, com = _phases(columns, "ee_position_error_m"), _phases(columns, "com_position_error_m")
     lines += ["| phase | EE max error (mm): median / p90 / max | CoM max error (mm): median / "
               "p90 / max | runs |", "|---|---|---|---|"]
@@ -88,6 +89,24 @@ def report(path: Path, study: str | None) -> str:
     if study is not None and "param.random_disturbances.seed" in params:
         lines += ["", *_by_direction(rows, study)]
     return "\n".join(lines)
+
+
+def _causes(rows):
+    """The failed runs counted by ``failure_cause`` (none for a table written before it)."""
+    failed = [r for r in rows if r["completed"] != "true"]
+    if not failed or "failure_cause" not in rows[0]:
+        return []
+    by_cause = collections.defaultdict(list)
+    for r in failed:
+        by_cause[r["failure_cause"] or f"({r['failure_kind'] or 'unknown'})"].append(
+            _f(r["simulated_time_s"]))
+    out = ["Failures by cause (aerial_drake.simulation.failure_cause):", "",
+           "| cause | runs | failed at (s): min / median / max |", "|---|---|---|"]
+    for cause, times in sorted(by_cause.items(), key=lambda item: -len(item[1])):
+        t = np.array([x for x in times if np.isfinite(x)])
+        when = f"{t.min():.2f} / {np.median(t):.2f} / {t.max():.2f}" if t.size else ""
+        out.append(f"| {cause} | {len(times)} | {when} |")
+    return [*out, ""]
 
 
 def _map(rows, grid, ee):

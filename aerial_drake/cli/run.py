@@ -142,7 +142,9 @@ def cmd_run(args: argparse.Namespace) -> int:
                             f"logs up to the interruption are in {out}")
     except SimulationFailed as err:
         _write_run_figures(out, args)  # the figures of the log up to the failure
-        return report_error(args, 1, err, f"logs up to the failure are in {out}")
+        cause = (err.result.metrics.get("failure_cause") or {}) if err.result else {}
+        why = f"cause: {cause['detail']}\n" if "detail" in cause else ""
+        return report_error(args, 1, err, f"{why}logs up to the failure are in {out}")
     except Interrupted as err:  # before the simulation started (building the model)
         return report_error(args, err.exit_status, f"interrupted ({err}) before the "
                             "simulation; nothing written")

@@ -5,6 +5,7 @@ the run's metrics from that log (:func:`run_metrics`)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -13,9 +14,11 @@ from pydrake.systems.primitives import VectorLogSink
 
 from aerial_drake.control.law import AssumptionViolation, diagnostics_layout
 from aerial_drake.simulation.diagram import ClosedLoop, input_limits
+from aerial_drake.simulation.failure_cause import arm_stretch, classify_failure, singular_stop
 from aerial_drake.simulation.metrics import (
     compute_metrics,
     disturbance_response,
+    input_names,
     limits_by_input,
     phase_edges,
     rotor_metrics,
@@ -124,8 +127,10 @@ def log_entries(log: dict[str, np.ndarray], layouts: dict[str, Layout]
 
 
 def run_metrics(scenario: Scenario, loop: ClosedLoop, log: dict[str, np.ndarray],
-                layouts: dict[str, Layout], wall: float, sim_time: float) -> dict:
-    """metrics.json's content (README) of a run's log (:func:`collect_log`)."""
+                layouts: dict[str, Layout], wall: float, sim_time: float,
+                failure: str | None = None) -> dict:
+    """metrics.json's content (README) of a run's log (:func:`collect_log`); ``failure``:
+    the run's failure message (None: it completed), classified in ``failure_cause``."""
     lower, upper = input_limits(scenario, loop.controller_model)
     windows = [(d.start, d.stop) for d in scenario.disturbances]
     edges = phase_edges(windows, scenario.duration)
@@ -148,4 +153,28 @@ def run_metrics(scenario: Scenario, loop: ClosedLoop, log: dict[str, np.ndarray]
         metrics["rotors"] = rotor_metrics(
             log["plant_state"][:, nq + sim.rotor_velocity_indices], log["rotor_drive_torque"],
             scenario.rotors.speed * np.array(sim.rotor_directions))
+    metrics["failure_cause"] = failure_cause(scenario, loop, log, named, failure)
     return metrics
+
+
+def failure_cause(scenario: Scenario, loop: ClosedLoop, log: dict[str, np.ndarray],
+                  named: dict[str, np.ndarray], failure: str | None) -> dict | None:
+    """:func:`aerial_drake.simulation.failure_cause.classify_failure` of a run's log: the
+    inputs against the actuators' ratings (the limits the run saturates at, or would with
+    ``actuation.saturate``), the arm's stretch at the last logged state (singular-Jacobian
+    stops only: the one posture it needs)."""
+    if failure is None:
+        return None
+    model = loop.controller_model
+    rated = dataclasses.replace(scenario, actuation=dataclasses.replace(
+        scenario.actuation, saturate=True))
+    lower, upper = input_limits(rated, model)
+    stretch = None
+    x = log["plant_state"][-1][loop.simulated_plant.rigid_state_indices] if len(log["t"]) \
+        else None
+    if singular_stop(failure) and x is not None and np.all(np.isfinite(x)):
+        stretch = arm_stretch(model, x[:model.plant.num_positions()])
+    return classify_failure(
+        failure, t=log["t"], applied=log["applied_command"], lower=lower, upper=upper,
+        names=input_names(model.n), sigma_min_J3=named.get("sigma_min_J3"),
+        sigma_limit=scenario.sigma_min_J3_limit, stretch=stretch)

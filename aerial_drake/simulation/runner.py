@@ -327,7 +327,7 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
             failure = (f"t = {sim_time:.4f} s: {what} (first non-finite signal: "
                        f"'{bad or 'unknown'}'); Drake: {failure.split(': ', 1)[-1]}; "
                        f"{likely_cause(scenario)}")
-        metrics = run_metrics(scenario, loop, arrays, layouts, wall, sim_time)
+        metrics = run_metrics(scenario, loop, arrays, layouts, wall, sim_time, failure)
         result = RunResult(scenario=scenario, log=arrays, metrics=metrics, wall_time_s=wall,
                            completed=failure is None, failure=failure, layouts=layouts,
                            task_labels=_task_labels(loop))

@@ -28,7 +28,10 @@ from aerial_drake.simulation.outputs import OutputError, strict_json, write_text
 
 #: The columns every table starts with; then ``param.*``, then the run's outcome, then metrics.
 ID_COLUMNS = ("run_id", "index", "draw")
-OUTCOME_COLUMNS = ("completed", "failure_kind", "failure", "wall_time_s", "worker")
+#: ``failure_cause``: metrics.json's ``failure_cause.cause`` (simulation.failure_cause) of a
+#: run that failed in simulation, empty otherwise.
+OUTCOME_COLUMNS = ("completed", "failure_kind", "failure", "failure_cause", "wall_time_s",
+                   "worker")
 #: Failures of the cluster, not of the run: tried again when the study is resumed.
 RETRIED_KINDS = ("worker",)
 
@@ -66,8 +69,10 @@ class ResultsTable:
         header = next(reader, None)
         if header != columns:
             raise OutputError(f"{path} holds the results of a study with other columns "
-                              f"(parameters or metrics differ): give another --out, or "
-                              "remove the file to start again")
+                              f"({_column_change(header or [], columns)}: its parameters or "
+                              "metrics differ, or it was written by a version with other "
+                              "outcome columns, e.g. before failure_cause): give another "
+                              "--out, or --restart (or remove the file) to start again")
         found = list(reader)
         rows = [dict(zip(columns, cells)) for cells in found if len(cells) == len(columns)]
         table.rows = [row for row in rows if row["failure_kind"] not in RETRIED_KINDS]
@@ -94,6 +99,15 @@ class ResultsTable:
             f.flush()
             os.fsync(f.fileno())
         self.rows.append(dict(zip(self.columns, next(csv.reader([line])))))
+
+
+def _column_change(header: list[str], columns: list[str]) -> str:
+    """What differs between a table's ``header`` and the ``columns`` expected, in a phrase."""
+    missing = [c for c in columns if c not in header]
+    extra = [c for c in header if c not in columns]
+    said = [f"{label}: {', '.join(names[:5])}{', ...' if len(names) > 5 else ''}"
+            for label, names in (("missing", missing), ("not expected", extra)) if names]
+    return "; ".join(said) or "the same columns in another order"
 
 
 def read_table_text(path: Path, fix: str) -> str:

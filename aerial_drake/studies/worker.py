@@ -72,8 +72,10 @@ def _one_line(text: str) -> str:
 def run_planned(scenario_text: str) -> dict[str, Any]:
     """Run the scenario of ``scenario_text``; its row: ``completed``, ``failure_kind``
     ("" / "simulation": the run failed, e.g. divergence or an assumption violated / "error":
-    it could not be built or raised), ``failure``, ``wall_time_s``, ``worker`` and the
-    flattened metrics (those of the run up to its failure, where it got that far)."""
+    it could not be built or raised), ``failure``, ``failure_cause`` (the class of a
+    "simulation" failure, :mod:`aerial_drake.simulation.failure_cause`), ``wall_time_s``,
+    ``worker`` and the flattened metrics (those of the run up to its failure, where it got
+    that far)."""
     ensure_warm()
     start = time.perf_counter()
     metrics: dict = {}
@@ -90,7 +92,9 @@ def run_planned(scenario_text: str) -> dict[str, Any]:
         completed, kind, failure = False, "error", _one_line(f"{type(err).__name__}: {err}")
     except Exception as err:  # noqa: BLE001 - a run's bug is its row, never the study's end
         completed, kind, failure = False, "error", _one_line(f"{type(err).__name__}: {err}")
+    cause = metrics.get("failure_cause") or {}
     return {"completed": completed, "failure_kind": kind, "failure": failure,
+            "failure_cause": cause.get("cause", "") if kind == "simulation" else "",
             "wall_time_s": time.perf_counter() - start,
             "worker": f"{socket.gethostname()}:{os.getpid()}", **flatten_metrics(metrics)}
 

@@ -121,7 +121,7 @@ def test_disturbances_stay_bounded_and_reconverge(nominal):
 
 def test_metrics_file(nominal):
     m = json.loads((nominal.out_dir / "metrics.json").read_text())
-    assert m["completed"] is True and m["failure"] is None
+    assert m["completed"] is True and m["failure"] is None and m["failure_cause"] is None
     assert len(m["phases"]) == 5
     log = np.load(nominal.out_dir / "log.npz")
     t = log["t"]
@@ -169,6 +169,12 @@ def test_assumption_violation_stops_with_time_and_value(tmp_path, monkeypatch):
     m = json.loads((tmp_path / "metrics.json").read_text())
     assert m["completed"] is False and "Assumption 1" in m["failure"]
     assert 0.1 < m["simulated_time_s"] < 0.2
+    # Its cause from the log: none of the physical ones (the threshold was raised to stop it
+    # in a calm run), the arm far from stretched, the time the message's.
+    cause = m["failure_cause"]
+    assert cause["cause"] == "other" and cause["time_s"] == pytest.approx(m["simulated_time_s"])
+    assert cause["arm_stretch"] < 0.9 and cause["saturated_inputs"] == []
+    assert cause["sigma_min_J3"] == pytest.approx(0.2, abs=1e-3)
 
 
 def test_singular_start_posture_is_rejected_before_simulating(tmp_path, monkeypatch):

@@ -30,6 +30,11 @@ def zero_run():
     return result, stream.getvalue()
 
 
+def test_a_completed_run_has_no_failure_cause(zero_run):
+    result, _ = zero_run
+    assert result.completed and result.metrics["failure_cause"] is None
+
+
 def test_pause_times_are_multiples_of_the_period_then_the_end():
     assert dut.pause_times(2.5, 1e-3) == [1000 * 1e-3, 2000 * 1e-3, 2.5]
     assert dut.pause_times(3.0, 1e-3) == [1.0, 2.0, 3.0]
@@ -98,6 +103,7 @@ def test_diverging_plant_stops_with_the_time_of_the_first_non_finite_sample(
                          controller_factory=zero_controller)
     metrics = json.loads((tmp_path / "metrics.json").read_text())
     assert metrics["completed"] is False and "diverged" in metrics["failure"]
+    assert metrics["failure_cause"]["cause"] == "divergence"
     assert metrics["simulated_time_s"] == 0.0
     log = np.load(tmp_path / "log.npz")
     assert log["t"].tolist() == [0.0]

@@ -12,7 +12,8 @@ COLUMNS = [*dut.ID_COLUMNS, "param.x", *dut.OUTCOME_COLUMNS, "metric"]
 def _row(i, kind="", value=0.1):
     return {"run_id": f"id{i}", "index": i, "draw": 0, "param.x": 1.5, "completed": not kind,
             "failure_kind": kind, "failure": "a, \"quoted\" reason" if kind else "",
-            "wall_time_s": 1.0, "worker": "host:1", "metric": value}
+            "failure_cause": "reach" if kind == "simulation" else "", "wall_time_s": 1.0,
+            "worker": "host:1", "metric": value}
 
 
 def test_rows_survive_reopening_and_a_cut_short_line_is_dropped(tmp_path):
@@ -27,7 +28,7 @@ def test_rows_survive_reopening_and_a_cut_short_line_is_dropped(tmp_path):
     assert not path.read_text().endswith("tr")
     rows = dut.read_table(path)
     assert float(rows[0]["metric"]) == 0.1 + 0.2  # written exactly
-    assert rows[1]["failure"] == 'a, "quoted" reason'
+    assert rows[1]["failure"] == 'a, "quoted" reason' and rows[1]["failure_cause"] == "reach"
 
 
 def test_the_clusters_failures_are_tried_again(tmp_path):
@@ -44,6 +45,21 @@ def test_another_studys_table_is_refused(tmp_path):
     dut.ResultsTable.open(path, COLUMNS).append(_row(0))
     with pytest.raises(OutputError, match="other columns"):
         dut.ResultsTable.open(path, COLUMNS[:-1])
+
+
+def test_failure_cause_follows_failure():
+    assert dut.OUTCOME_COLUMNS.index("failure_cause") == dut.OUTCOME_COLUMNS.index("failure") + 1
+
+
+def test_a_table_written_before_failure_cause_is_refused_naming_the_column(tmp_path):
+    # The outcome columns of tables written before the failure cause existed: such a table
+    # is refused (its rows lack the column), saying which column and how to start again.
+    path = tmp_path / "results.csv"
+    old = [c for c in COLUMNS if c != "failure_cause"]
+    dut.ResultsTable.open(path, old).append(_row(0))
+    with pytest.raises(OutputError, match=r"other columns \(missing: failure_cause: .*"
+                                          r"before failure_cause\).*--restart"):
+        dut.ResultsTable.open(path, COLUMNS)
 
 
 def test_pandas_reads_it(tmp_path):
