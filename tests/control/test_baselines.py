@@ -13,7 +13,11 @@ from pydrake.multibody.tree import BodyIndex
 from aerial_drake.control.baselines import BaselineController, BaselineParams
 from aerial_drake.control.baselines import arm as arm_law
 from aerial_drake.control.baselines import vehicle as dut_vehicle
-from aerial_drake.control.baselines.tuning import attitude_poles, locked_inertia
+from aerial_drake.control.baselines.tuning import (
+    attitude_poles,
+    locked_inertia,
+    tilt_loop_poles,
+)
 from aerial_drake.control.controller import make_controller
 from aerial_drake.control.law import diagnostics_slices
 from aerial_drake.control.reference_pose import body_offset_in_heading_frame
@@ -207,6 +211,22 @@ def test_attitude_poles_without_and_with_the_lag():
         np.testing.assert_allclose(np.polyval([J * tau, J, 200.0, 250.0], poles), 0.0,
                                    atol=1e-6 * 250.0)
         assert poles[0].real == pytest.approx(-1.26, abs=0.04)  # the slow root stays
+
+
+def test_tilt_loop_poles_split_into_the_com_and_attitude_roots_without_the_lag():
+    """Without the lag and with the true inertia assumed, the linearised tilt axis with its
+    position loop is block-triangular in error coordinates: its poles are the CoM's (-3.538,
+    -4.126 1/s) and the attitude's; an assumed inertia off the true one moves them."""
+    m, g = 54.8, 9.81
+    for J in (1.46, 3.937):
+        poles = tilt_loop_poles(J, J, m, g, 800.0, 420.0, 250.0, 200.0)
+        expected = np.concatenate([np.roots([m, 420.0, 800.0]), attitude_poles(J, 250, 200)])
+        np.testing.assert_allclose(np.sort(poles.real), np.sort(expected.real), rtol=1e-8)
+        assert np.abs(poles.imag).max() < 1e-8
+    off = tilt_loop_poles(3.937, 0.36, m, g, 800.0, 420.0, 250.0, 200.0)
+    assert np.abs(np.sort(off.real) - np.sort(poles.real)).max() > 0.1
+    lagged = tilt_loop_poles(3.937, 3.937, m, g, 800.0, 420.0, 250.0, 200.0, 0.1 / np.log(9))
+    assert lagged.size == 5 and np.all(lagged.real < 0)
 
 
 def test_params_are_validated():
