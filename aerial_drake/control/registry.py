@@ -50,12 +50,18 @@ def _baseline(kind: str) -> ControllerFactory:
     def factory(scenario: Any, model: AerialManipulator,
                 reference: ReferenceSource | None = None):
         from aerial_drake.control.baselines.controller import BaselineController
-        from aerial_drake.control.reference_pose import body_offset_in_heading_frame
+        from aerial_drake.control.baselines.tuning import locked_inertia
+        from aerial_drake.control.reference_pose import (
+            body_offset_in_heading_frame,
+            reference_configuration,
+        )
         assert model.task is not None
+        q0 = reference_configuration(scenario, model, reference=reference)
         return BaselineController(
             model.plant, model.base_body, model.end_effector_frame, model.task,
             scenario.gains, kind=kind,
             body_offset_H=body_offset_in_heading_frame(scenario, model, reference),
+            locked_inertia=locked_inertia(model.plant, model.base_body, q0),
             params=scenario.controller.baseline, period=scenario.controller_period)
     return factory
 

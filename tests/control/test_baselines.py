@@ -13,10 +13,16 @@ from pydrake.multibody.tree import BodyIndex
 from aerial_drake.control.baselines import BaselineController, BaselineParams
 from aerial_drake.control.baselines import arm as arm_law
 from aerial_drake.control.baselines import vehicle as dut_vehicle
+from aerial_drake.control.baselines.tuning import (
+    attitude_poles,
+    locked_inertia,
+    tilt_loop_poles,
+)
 from aerial_drake.control.controller import make_controller
 from aerial_drake.control.law import diagnostics_slices
 from aerial_drake.control.reference_pose import body_offset_in_heading_frame
 from aerial_drake.robots.models import make_plant
+from aerial_drake.simulation.diagram import build_closed_loop
 from aerial_drake.simulation.metrics import saturated_after_key
 from aerial_drake.simulation.runner import reference_configuration, run_scenario
 from aerial_drake.simulation.scenarios import ControllerConfig, InitialCondition, load_scenario
@@ -32,9 +38,11 @@ def setup():
     scenario = load_scenario("nominal")
     model = make_plant("rigid")
     offset = body_offset_in_heading_frame(scenario, model)
+    inertia = locked_inertia(model.plant, model.base_body,
+                             reference_configuration(scenario, model, 0.0))
     controllers = {kind: BaselineController(
         model.plant, model.base_body, model.end_effector_frame, model.task, scenario.gains,
-        kind=kind, body_offset_H=offset)
+        kind=kind, body_offset_H=offset, locked_inertia=inertia)
         for kind in KINDS}
     return scenario, model, controllers
 
@@ -153,6 +161,72 @@ def test_body_reference_keeps_the_offset_in_the_heading_frame():
     # The 4th derivative of a constant-rate rotation: w^4 times the rotated offset's
     # horizontal part.
     np.testing.assert_allclose(ref[4][:2], -w ** 4 * (H @ offset)[:2], atol=1e-12)
+
+
+def test_the_assumed_inertia_is_the_locked_robots_about_its_com(setup):
+    """The rule of docs/baselines.md ("Tuning"): without controller.baseline.vehicle_inertia
+    the vehicle law assumes the whole robot's inertia, locked at the reference configuration
+    of t = 0, about the system's CoM, in the base frame: checked body by body (parallel axis
+    theorem) on the controller the scenario builds; a given diagonal replaces it, and a
+    controller built with neither is refused."""
+    scenario, model, _ = setup
+    plant = model.plant
+    ctx = plant.CreateDefaultContext()
+    plant.SetPositions(ctx, reference_configuration(scenario, model, 0.0))
+    R_WB = plant.EvalBodyPoseInWorld(ctx, model.base_body).rotation().matrix()
+    p_WG = plant.CalcCenterOfMassPositionInWorld(ctx)
+    expected = np.zeros((3, 3))
+    for i in range(1, plant.num_bodies()):
+        body = plant.get_body(BodyIndex(i))
+        X_WBi = plant.EvalBodyPoseInWorld(ctx, body)
+        M = body.CalcSpatialInertiaInBodyFrame(ctx)
+        R = X_WBi.rotation().matrix()
+        I_com = M.Shift(M.get_com()).CalcRotationalInertia().CopyToFullMatrix3()
+        r = X_WBi @ M.get_com() - p_WG
+        expected += R @ I_com @ R.T + M.get_mass() * (r @ r * np.eye(3) - np.outer(r, r))
+    expected = R_WB.T @ expected @ R_WB
+    loop = build_closed_loop(dataclasses.replace(scenario, controller=ControllerConfig(
+        type="uncoupled")))
+    np.testing.assert_allclose(loop.controller.assumed_inertia, expected, rtol=1e-12,
+                               atol=1e-12)
+    np.testing.assert_allclose(np.diag(expected), [4.673, 3.797, 1.933], atol=5e-4)
+    given = BaselineParams(vehicle_inertia=[1.46, 0.36, 1.46])
+    loop = build_closed_loop(dataclasses.replace(scenario, controller=ControllerConfig(
+        type="uncoupled", baseline=given)))
+    np.testing.assert_array_equal(loop.controller.assumed_inertia, np.diag([1.46, 0.36, 1.46]))
+    with pytest.raises(ValueError, match="locked_inertia"):
+        BaselineController(plant, model.base_body, model.end_effector_frame, model.task,
+                           scenario.gains, kind="uncoupled", body_offset_H=np.zeros(3))
+
+
+def test_attitude_poles_without_and_with_the_lag():
+    """Without the lag, the roots of Table II's (23c) (docs/analysis.md's -1.261619 and
+    -135.724682 1/s for 1.46 kg m^2); with it, the roots of J tau s^3 + J s^2 + k_w s + k_R."""
+    np.testing.assert_allclose(attitude_poles(1.46, 250.0, 200.0), [-1.261619, -135.724682],
+                               rtol=1e-6)
+    tau = 0.1 / np.log(9.0)
+    for J in (0.36, 1.673, 4.794):
+        poles = attitude_poles(J, 250.0, 200.0, tau)
+        assert poles.size == 3 and np.all(poles.real < 0)
+        np.testing.assert_allclose(np.polyval([J * tau, J, 200.0, 250.0], poles), 0.0,
+                                   atol=1e-6 * 250.0)
+        assert poles[0].real == pytest.approx(-1.26, abs=0.04)  # the slow root stays
+
+
+def test_tilt_loop_poles_split_into_the_com_and_attitude_roots_without_the_lag():
+    """Without the lag and with the true inertia assumed, the linearised tilt axis with its
+    position loop is block-triangular in error coordinates: its poles are the CoM's (-3.538,
+    -4.126 1/s) and the attitude's; an assumed inertia off the true one moves them."""
+    m, g = 54.8, 9.81
+    for J in (1.46, 3.937):
+        poles = tilt_loop_poles(J, J, m, g, 800.0, 420.0, 250.0, 200.0)
+        expected = np.concatenate([np.roots([m, 420.0, 800.0]), attitude_poles(J, 250, 200)])
+        np.testing.assert_allclose(np.sort(poles.real), np.sort(expected.real), rtol=1e-8)
+        assert np.abs(poles.imag).max() < 1e-8
+    off = tilt_loop_poles(3.937, 0.36, m, g, 800.0, 420.0, 250.0, 200.0)
+    assert np.abs(np.sort(off.real) - np.sort(poles.real)).max() > 0.1
+    lagged = tilt_loop_poles(3.937, 3.937, m, g, 800.0, 420.0, 250.0, 200.0, 0.1 / np.log(9))
+    assert lagged.size == 5 and np.all(lagged.real < 0)
 
 
 def test_params_are_validated():

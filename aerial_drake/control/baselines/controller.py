@@ -56,18 +56,21 @@ class BaselineController(ControllerBase):
         plant, base_body, end_effector_frame, task: the model and its task (as
             :class:`~aerial_drake.control.controller.DecoupledController`).
         gains: Table II's gains: K_x, D_x for the body position, k_R, k_w for its attitude,
-            K_y, K_z for the arm's task (``Lambda2_bar`` unused: the vehicle's inertia is).
+            K_y, K_z for the arm's task (``Lambda2_bar`` unused: the assumed inertia is).
         kind: one of :data:`BASELINE_TYPES`.
         body_offset_H: the CoM's offset from the body in the heading frame that the body's
             reference keeps (:func:`.vehicle.body_reference`).
+        locked_inertia: the inertia (3, 3) the vehicle law assumes when
+            ``params.vehicle_inertia`` is empty: the whole robot's, locked at the reference
+            configuration of t = 0, about its CoM (:func:`.tuning.locked_inertia`).
         params: :class:`BaselineParams`.
         period: sampling period (s); 0 for continuous feedback.
     """
 
     def __init__(self, plant: MultibodyPlant, base_body: RigidBody, end_effector_frame: Frame,
                  task: TaskLayout, gains: Gains, *,
-                 kind: str, body_offset_H: np.ndarray, params: BaselineParams | None = None,
-                 period: float = 0.0):
+                 kind: str, body_offset_H: np.ndarray, locked_inertia: np.ndarray | None = None,
+                 params: BaselineParams | None = None, period: float = 0.0):
         if kind not in BASELINE_TYPES:
             raise ValueError(f"unknown baseline '{kind}'; valid: {BASELINE_TYPES}")
         nv = plant.num_velocities()
@@ -86,9 +89,19 @@ class BaselineController(ControllerBase):
         inertia = np.asarray(self._params.vehicle_inertia, dtype=float)
         if inertia.size:
             self._J_v = np.diag(inertia)
+        elif locked_inertia is not None and np.shape(locked_inertia) == (3, 3):
+            self._J_v = np.array(locked_inertia, dtype=float)
         else:
-            I_B = base_body.CalcSpatialInertiaInBodyFrame(self._ctx)
-            self._J_v = I_B.CalcRotationalInertia().CopyToFullMatrix3()
+            raise ValueError(
+                "BaselineController needs the inertia its vehicle law assumes: pass "
+                "locked_inertia (3, 3), e.g. baselines.tuning.locked_inertia(plant, base_body, "
+                f"q) at the reference configuration of t = 0, or set "
+                f"controller.baseline.vehicle_inertia; got locked_inertia={locked_inertia!r}")
+
+    @property
+    def assumed_inertia(self) -> np.ndarray:
+        """The rotational inertia (3, 3, base frame, kg m^2) the vehicle law assumes."""
+        return self._J_v.copy()
 
     # --- The law ------------------------------------------------------------------------
     def calc_command(self, t: float, x: np.ndarray, com: np.ndarray, task: np.ndarray,

@@ -17,8 +17,10 @@ class BaselineParams:
     """Parameters of the baselines (scenario ``controller.baseline``); their gains are the
     scenario's ``gains`` (Table II), used as docs/baselines.md says."""
 
-    # The vehicle inertia the attitude law assumes, diagonal (kg m^2); empty: the helicopter
-    # body's own, from the model (Table I: diag(1.46, 0.36, 1.46)).
+    # The inertia the vehicle's attitude law assumes, diagonal (kg m^2); empty: the whole
+    # robot's, locked at the reference configuration of t = 0, about its centre of mass,
+    # from the model (baselines.tuning.locked_inertia; docs/baselines.md, "Tuning").
+    # [1.46, 0.36, 1.46] is the helicopter body's alone (Table I), the default before.
     vehicle_inertia: list[float] = field(default_factory=list)
     # The run stops when the arm's fixed-base task Jacobian's smallest singular value falls
     # below this (the analogue of Assumption 1).

@@ -1,7 +1,8 @@
 """The vehicle's law of the baselines: Lee, Leok and McClamroch's geometric tracking controller
 on SE(3) ("Geometric tracking control of a quadrotor UAV on SE(3)", CDC 2010, eqs. (15)-(16)),
-applied to the helicopter body alone: its own position p_b and attitude R_b, the total mass
-m for the hover thrust, the body's own inertia J_v; the arm is unknown to it.
+applied to the helicopter body: its own position p_b and attitude R_b, the total mass m for
+the hover thrust, and an assumed inertia J_v (the controller passes the whole robot's, locked
+at the start posture: :mod:`.tuning`); the arm's motion is unknown to it.
 
 Lee et al. write z down; with z up (ours) their law reads
 
@@ -14,9 +15,9 @@ w_d_dot = -w_b x w_d + R_b^T R_d Omega_d_dot (Lee's -J(w_b^ R^T R_d Omega_d - R^
 Omega_d_dot) term). Omega_d and its derivative need F' and F'', taken from the vehicle's own
 model m p_b'' = f R_b e3 - m g e3, as the paper does for the CoM ((9a), docs/control.md): the
 same functions (:func:`aerial_drake.control.law.desired_force`, :func:`desired_attitude`).
-On the vehicle alone the closed loop is m e_x'' + D_x e_x' + K_x e_x = 0 (near hover) and
-J_v e_w' + k_w e_w + k_R e_R = 0: with Table II's gains and J_v = Lambda2_bar (Table I's
-inertia, as Table II's) the same poles as the paper's (23a)-(23c).
+On a rigid body of inertia J_v the closed loop is m e_x'' + D_x e_x' + K_x e_x = 0 (near
+hover) and J_v e_w' + k_w e_w + k_R e_R = 0: with Table II's gains and J_v = Lambda2_bar
+(Table I's body inertia, as Table II's) the same poles as the paper's (23a)-(23c).
 """
 
 from __future__ import annotations
