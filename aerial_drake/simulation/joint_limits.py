@@ -22,7 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from aerial_drake.robots.models import AerialManipulator
+from pydrake.multibody.plant import MultibodyPlant
+
+from aerial_drake.robots.models import AerialManipulator, add_aerial_manipulator
 
 #: A one-sided limit that does not straddle 0: its ratios are measured from this far inside.
 _ONE_SIDED_REFERENCE = 1.0
@@ -54,27 +56,41 @@ class ArmLimits:
     def reference_point(self) -> np.ndarray:
         """Where each joint's position ratio is measured from (the module's docstring)."""
         lo, up = self.lower, self.upper
-        middle = np.where(np.isfinite(lo) & np.isfinite(up), 0.5 * (lo + up),
-                          np.where(np.isfinite(lo), lo + _ONE_SIDED_REFERENCE,
-                                   up - _ONE_SIDED_REFERENCE))
+        with np.errstate(invalid="ignore"):  # (-inf + inf: a side unlimited, not used)
+            middle = np.where(np.isfinite(lo) & np.isfinite(up), 0.5 * (lo + up),
+                              np.where(np.isfinite(lo), lo + _ONE_SIDED_REFERENCE,
+                                       up - _ONE_SIDED_REFERENCE))
         return np.where((lo < 0) & (up > 0), 0.0, middle)
 
-    def position_ratios(self, x: np.ndarray) -> np.ndarray:
-        """(N, n) position ratios of the states ``x`` (N, nx); NaN for an unlimited joint."""
+    def position_ratios(self, x: np.ndarray, signed: bool = False) -> np.ndarray:
+        """(N, n) position ratios of the states ``x`` (N, nx); NaN for an unlimited joint.
+        ``signed``: negative on the lower side (-1 at the lower limit, +1 at the upper)."""
         q = np.asarray(x)[..., self.q_index]
         p = self.reference_point()
         with np.errstate(invalid="ignore", divide="ignore"):
             above = (q - p) / (self.upper - p)  # 0 where the side is infinite
             below = (q - p) / (self.lower - p)
-            ratio = np.where(q >= p, above, below)
+            ratio = np.where(q >= p, above, -below if signed else below)
         unlimited = ~np.isfinite(self.lower) & ~np.isfinite(self.upper)
         return np.where(unlimited, np.nan, ratio)
 
-    def velocity_ratios(self, x: np.ndarray) -> np.ndarray:
-        """(N, n) |v| / v_max of the states ``x``; NaN where v_max is infinite (or 0)."""
+    def velocity_ratios(self, x: np.ndarray, signed: bool = False) -> np.ndarray:
+        """(N, n) |v| / v_max of the states ``x`` (``signed``: v / v_max); NaN where v_max
+        is infinite (or 0)."""
         v = np.asarray(x)[..., self.v_index]
         limited = np.isfinite(self.velocity) & (self.velocity > 0)
-        return np.where(limited, np.abs(v) / np.where(limited, self.velocity, 1.0), np.nan)
+        ratio = (v if signed else np.abs(v)) / np.where(limited, self.velocity, 1.0)
+        return np.where(limited, ratio, np.nan)
+
+
+def scenario_arm_limits(scenario: Any) -> ArmLimits:
+    """The arm's limits in the simulated plant a run of ``scenario`` builds (its variant and
+    environment, so the state indices are the log's): to read a run's log afterwards."""
+    model = add_aerial_manipulator(
+        MultibodyPlant(0.0), scenario.plant_variant, robot=scenario.robot_description(),
+        environment=scenario.environment.model_directives(),
+        environment_packages=scenario.environment.packages)
+    return ArmLimits.of(model)
 
 
 def _max_or_none(values: np.ndarray) -> float | None:
@@ -99,15 +115,17 @@ def limit_metrics(states: np.ndarray, limits: ArmLimits) -> dict[str, Any]:
     return {"joint_limits": table, "joint_limits_exceeded": exceeded}
 
 
-def exceeded_summary(metrics: dict) -> str | None:
-    """One line naming the joints a run took past their limits (its metrics' entries), e.g.
-    ``lwr_joint_4 position 1.06, lwr_joint_7 position 2.52 velocity 1.51``; None if none."""
+def exceeded_summary(metrics: dict, kinds: tuple[str, ...] = ("position", "velocity")
+                     ) -> str | None:
+    """One line naming the joints a run took past their limits of ``kinds`` (its metrics'
+    entries), e.g. ``lwr_joint_4 position 1.06, lwr_joint_7 position 2.52 velocity 1.51``;
+    None if none."""
     parts = []
     for name in metrics.get("joint_limits_exceeded") or []:
         entry = metrics["joint_limits"][name]
-        past = [f"{kind} {entry[f'{kind}_ratio']:.2f}" for kind in ("position", "velocity")
+        past = [f"{kind} {entry[f'{kind}_ratio']:.2f}" for kind in kinds
                 if (entry[f"{kind}_ratio"] or 0.0) > 1.0]
-        parts.append(f"{name} {' '.join(past)}")
+        parts += [f"{name} {' '.join(past)}"] if past else []
     return ", ".join(parts) or None
 
 
