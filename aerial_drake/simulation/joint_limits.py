@@ -21,7 +21,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-
 from pydrake.multibody.plant import MultibodyPlant
 
 from aerial_drake.robots.models import AerialManipulator, add_aerial_manipulator
