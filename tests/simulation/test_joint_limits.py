@@ -3,15 +3,23 @@
 runs (0.6 s) whose reference turns the LWR's joint 7 past its +-170 deg limit."""
 
 import copy
+import io
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
+from aerial_drake.cli.run import _warn_past_limits
 from aerial_drake.simulation import joint_limits as dut
 from aerial_drake.simulation.diagram import build_closed_loop
 from aerial_drake.simulation.runner import SimulationFailed, run_scenario
-from aerial_drake.simulation.scenarios import ScenarioError, load_scenario, shipped_scenarios
+from aerial_drake.simulation.scenarios import (
+    JointLimits,
+    ScenarioError,
+    load_scenario,
+    shipped_scenarios,
+)
 from aerial_drake.viz.run_plots import write_run_figures
 
 INF = math.inf
@@ -219,3 +227,21 @@ def test_the_runner_stops_early_at_a_pause_past_a_limit():
         with pytest.raises(SimulationFailed, match="t = 0.4"):
             run_scenario(wrist_turn(duration=2.5), progress=False)
     assert stopped_at == [True]  # the first pause (1 s) was past; no other was reached
+
+
+def test_the_command_line_warns_in_one_line_of_limits_it_only_reports():
+    metrics = dut.limit_metrics(states([[1.2, 0.0]], [[3.0, 0.0]]),
+                                limits([-1.0, -1.0], [1.0, 1.0], [2.0, 2.0]))
+    for modes, expected in ((("report", "report"), "j1 position 1.20 velocity 1.50"),
+                            (("stop", "report"), "j1 velocity 1.50"),
+                            (("enforce", "stop"), None)):
+        stream = io.StringIO()
+        result = SimpleNamespace(scenario=SimpleNamespace(joint_limits=JointLimits(*modes)),
+                                 metrics=metrics)
+        _warn_past_limits(result, stream)
+        if expected is None:
+            assert stream.getvalue() == ""
+        else:
+            assert stream.getvalue().count("\n") == 1
+            assert stream.getvalue().startswith("warning: past the arm's joint limits")
+            assert stream.getvalue().rstrip().endswith(expected)
