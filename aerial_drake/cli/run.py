@@ -28,9 +28,22 @@ def _say(args: argparse.Namespace) -> TextIO:
 def _print_summary(result, stream: TextIO) -> None:
     from aerial_drake.studies.summary import format_summary
     print(format_summary(result.metrics), file=stream)
+    _warn_past_limits(result, stream)
     if result.out_dir is not None:
         print(f"wrote {result.out_dir / 'log.npz'} and {result.out_dir / 'metrics.json'}",
               file=stream)
+
+
+def _warn_past_limits(result, stream: TextIO) -> None:
+    """One line where a run went past the arm's limits that its joint_limits only report."""
+    from aerial_drake.simulation.joint_limits import exceeded_summary
+    modes = result.scenario.joint_limits
+    kinds = tuple(kind for kind, mode in (("position", modes.positions),
+                                          ("velocity", modes.velocities)) if mode == "report")
+    past = exceeded_summary(result.metrics, kinds)
+    if past:
+        print(f"warning: past the arm's joint limits (joint_limits report; max q/limit, "
+              f"|v|/v_max): {past}", file=stream)
 
 
 def _write_run_figures(out: Path, args: argparse.Namespace) -> None:

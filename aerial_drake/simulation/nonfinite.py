@@ -33,6 +33,17 @@ def first_non_finite_sample(arrays: dict[str, np.ndarray]) -> tuple[int, str] | 
     return first
 
 
+def cut_at_divergence(arrays: dict[str, np.ndarray], index: int, signal_name: str,
+                      cause: str) -> tuple[dict[str, np.ndarray], float, str]:
+    """The log up to its first non-finite sample (at ``index``, in ``signal_name``), that
+    sample's time and the failure message. The first non-finite sample is where the run went
+    wrong, whatever stopped it later, so the log ends there, as the message says."""
+    arrays = {k: v[:index + 1] for k, v in arrays.items()}
+    t = float(arrays["t"][index])
+    return arrays, t, (f"t = {t:.4f} s: {SIGNAL_MEANING[signal_name]} (first non-finite "
+                       f"signal: '{signal_name}'); {cause}")
+
+
 def likely_cause(scenario: Any) -> str:
     """A guess at why a run went non-finite, from the scenario's numbers far above the
     shipped scenarios' (the checks' ranges allow them; the dynamics may not)."""

@@ -15,6 +15,7 @@ from pydrake.systems.primitives import VectorLogSink
 from aerial_drake.control.law import AssumptionViolation, diagnostics_layout
 from aerial_drake.simulation.diagram import ClosedLoop, input_limits
 from aerial_drake.simulation.failure_cause import arm_stretch, classify_failure, singular_stop
+from aerial_drake.simulation.joint_limits import ArmLimits, limit_metrics
 from aerial_drake.simulation.metrics import (
     compute_metrics,
     disturbance_response,
@@ -148,6 +149,8 @@ def run_metrics(scenario: Scenario, loop: ClosedLoop, log: dict[str, np.ndarray]
             log["t"], named, [(d.target, d.start, d.stop) for d in scenario.disturbances]),
     })
     sim = loop.simulated_plant
+    # Past the arm's joint limits, whatever the scenario's joint_limits do (docs/reliability.md).
+    metrics.update(limit_metrics(log["plant_state"], ArmLimits.of(sim)))
     if sim.rotor_joints and "rotor_drive_torque" in log:
         nq = sim.plant.num_positions()
         metrics["rotors"] = rotor_metrics(

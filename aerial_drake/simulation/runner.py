@@ -24,8 +24,10 @@ from aerial_drake.simulation.diagram import ClosedLoop, build_simulation
 from aerial_drake.simulation.disturbances import resolve_random_disturbances
 from aerial_drake.simulation.feasibility import check_reference, check_start_posture
 from aerial_drake.simulation.interrupts import deferred, handling, signal_name
+from aerial_drake.simulation.joint_limits import LimitMonitor
 from aerial_drake.simulation.nonfinite import (
     SIGNAL_MEANING,
+    cut_at_divergence,
     first_non_finite_output,
     first_non_finite_sample,
     likely_cause,
@@ -164,9 +166,9 @@ def pause_times(duration: float, period: float, every: float = 1.0) -> list[floa
 
 
 def _advance(simulator: Simulator, plant: MultibodyPlant, pauses: list[float],
-             progress: _Progress) -> None:
+             progress: _Progress, limits: LimitMonitor) -> None:
     """Advance to each of ``pauses`` in turn, reporting progress; stop early at a pause where
-    the plant's state is not finite (:func:`run_scenario` then finds when from the log).
+    the plant's state is not finite or past a stopping ``limits`` (the log then says when).
 
     Checking between AdvanceTo calls replaces a per-step Simulator monitor, which cost a Python
     call at every 1 ms step. The controller checks the state at each of its evaluations, so a
@@ -177,12 +179,13 @@ def _advance(simulator: Simulator, plant: MultibodyPlant, pauses: list[float],
     for t in pauses:
         simulator.AdvanceTo(t)
         progress.report(context.get_time())
-        if not np.all(np.isfinite(plant.GetPositionsAndVelocities(plant_context))):
+        x = plant.GetPositionsAndVelocities(plant_context)
+        if not np.all(np.isfinite(x)) or limits.past(x):
             return
 
 
-def _simulate(simulator: Simulator, loop: ClosedLoop, pauses: list[float],
-              progress: _Progress) -> tuple[str | None, int | None, float]:
+def _simulate(simulator: Simulator, loop: ClosedLoop, pauses: list[float], progress: _Progress,
+              limits: LimitMonitor) -> tuple[str | None, int | None, float]:
     """Run the simulation; returns the failure message (None if it reached the end), the
     number of the signal that stopped it (None if none did), and the wall time (s)."""
     failure, interrupted = None, None
@@ -190,7 +193,7 @@ def _simulate(simulator: Simulator, loop: ClosedLoop, pauses: list[float],
     try:
         _prime_held_inputs(loop, simulator.get_mutable_context())
         simulator.Initialize()
-        _advance(simulator, loop.simulated_plant.plant, pauses, progress)
+        _advance(simulator, loop.simulated_plant.plant, pauses, progress, limits)
     except (AssumptionViolation, FloatingPointError) as err:
         failure = str(err)
     except RuntimeError as err:  # Drake's own (e.g. a NaN force): add the time
@@ -201,17 +204,6 @@ def _simulate(simulator: Simulator, loop: ClosedLoop, pauses: list[float],
         interrupted = getattr(err, "signum", signal.SIGINT)
         failure = f"interrupted ({signal_name(interrupted)}) at t = {time_now:.3f} s"
     return failure, interrupted, time.perf_counter() - start
-
-
-def _cut_at_divergence(arrays: dict[str, np.ndarray], index: int, signal_name: str,
-                       cause: str) -> tuple[dict[str, np.ndarray], float, str]:
-    """The log up to its first non-finite sample (at ``index``, in ``signal_name``), that
-    sample's time and the failure message. The first non-finite sample is where the run went
-    wrong, whatever stopped it later, so the log ends there, as the message says."""
-    arrays = {k: v[:index + 1] for k, v in arrays.items()}
-    t = float(arrays["t"][index])
-    return arrays, t, (f"t = {t:.4f} s: {SIGNAL_MEANING[signal_name]} (first non-finite "
-                       f"signal: '{signal_name}'); {cause}")
 
 
 def compile_kernels() -> None:
@@ -308,8 +300,9 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
     if before_start is not None:
         before_start()
     progress_lines = _Progress(scenario.duration, stream if progress else None)
-    failure, interrupted, wall = _simulate(
-        simulator, loop, pause_times(scenario.duration, scenario.log_period), progress_lines)
+    limits = LimitMonitor.of(scenario, loop.simulated_plant)  # joint_limits: stop
+    failure, interrupted, wall = _simulate(simulator, loop, pause_times(
+        scenario.duration, scenario.log_period), progress_lines, limits)
     # From here on a signal is held until the files are written (interrupts.deferred).
     with deferred() as held:
         if progress and _is_terminal(stream):
@@ -317,9 +310,12 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
         arrays, layouts = collect_log(scenario, loop, loggers, context)
         sim_time = float(context.get_time())
         diverged = first_non_finite_sample(arrays)
-        if diverged is not None:
-            arrays, sim_time, failure = _cut_at_divergence(arrays, *diverged,
-                                                           likely_cause(scenario))
+        crossed = limits.cut(arrays, diverged[0] if diverged else None)
+        if crossed is not None:  # past a joint limit first: the log ends there
+            (arrays, sim_time, failure), interrupted = crossed, None
+        elif diverged is not None:
+            arrays, sim_time, failure = cut_at_divergence(arrays, *diverged,
+                                                          likely_cause(scenario))
             interrupted = None
         elif failure is not None and "NaN" in failure:  # Drake's check, between samples
             bad = first_non_finite_output(loop, context)

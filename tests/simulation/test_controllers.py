@@ -137,7 +137,10 @@ def test_a_user_defined_controller_runs_through_the_scenario_machinery(tmp_path)
     diagnostics logged apart."""
     dut.register_controller("test_hold", hold_factory)
     path = tmp_path / "hold.yaml"
+    # The default reference (the paper's) starts with joint 6 past its limit (docs/paper.md,
+    # "Joint limits"); this test is about the controller, so the limits are only reported.
     path.write_text("name: hold\nduration: 0.3\ncontroller:\n  type: test_hold\n"
+                    "joint_limits:\n  positions: report\n"
                     + _required(load_scenario("nominal")))
     scenario = load_scenario(path)
     result = run_scenario(scenario, out_dir=tmp_path / "out", progress=False)

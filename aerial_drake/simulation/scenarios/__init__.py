@@ -37,12 +37,13 @@ from aerial_drake.simulation.scenarios.schema import (
     ControllerConfig,
     Disturbance,
     InitialCondition,
+    JointLimits,
     Rotors,
     Scenario,
 )
 
 __all__ = ["Scenario", "Disturbance", "InitialCondition", "Actuation", "Rotors",
-           "ControllerConfig", "ModelMismatch", "Payload", "Wind", "Sensing",
+           "ControllerConfig", "JointLimits", "ModelMismatch", "Payload", "Wind", "Sensing",
            "RandomDisturbances", "ScenarioError", "DISTURBANCE_TARGETS", "folder_name",
            "load_scenario", "shipped_scenarios", "scenario_directory", "apply_overrides",
            "parse_assignments", "robot_description", "robot_facts"]

@@ -127,6 +127,9 @@ JOINT_TARGET = Range(-2 * math.pi, 2 * math.pi, "rad")
 #: Where a disturbance window acts; OLD_TARGETS: earlier names, read with a FutureWarning.
 DISTURBANCE_TARGETS = ("vehicle", "end_effector")
 OLD_TARGETS = {"helicopter": "vehicle"}
+#: What an arm joint's limit does (the scenario's ``joint_limits``, docs/reliability.md).
+POSITION_LIMIT_MODES = ("stop", "enforce", "report")
+VELOCITY_LIMIT_MODES = ("stop", "report")
 # The perturbation sections (scenarios.perturbations).
 RELATIVE = Range(0.0, 0.9, fix="0.1 is a +-10 % error; 0 turns it off")
 SCALE = Range(0.1, 10.0, fix="1 keeps the model's value")

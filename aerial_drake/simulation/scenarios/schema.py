@@ -39,7 +39,7 @@ from aerial_drake.simulation.scenarios.world import Environment, continuous_plan
 from aerial_drake.trajectories.params import TrajectoryParams
 
 __all__ = ["Scenario", "Disturbance", "InitialCondition", "Actuation", "Rotors",
-           "ControllerConfig", "ModelMismatch", "Payload", "Wind", "Sensing",
+           "ControllerConfig", "JointLimits", "ModelMismatch", "Payload", "Wind", "Sensing",
            "RandomDisturbances"]
 
 
@@ -115,6 +115,18 @@ class ControllerConfig:
 
 
 @dataclass
+class JointLimits:
+    """What the arm's joint limits (its model files') do in a run (docs/reliability.md)."""
+
+    # "stop": the run fails at the first logged sample past a position limit, naming the
+    # joint; "enforce": the plant holds the joint at its limit (Drake's discrete plant only:
+    # set plant.time_step); "report": nothing stops (metrics.json reports the ratios).
+    positions: str = "stop"
+    # "stop" or "report" for the joint speed limits (|v| <= v_max).
+    velocities: str = "report"
+
+
+@dataclass
 class Scenario:
     """One run of the closed loop."""
 
@@ -166,6 +178,8 @@ class Scenario:
     # continuous, time_step 0) and the environment's model directives (default: none).
     plant: MultibodyPlantConfig = field(default_factory=continuous_plant)
     environment: Environment = field(default_factory=Environment)
+    # What the arm's joint limits do: stop the run (default), enforce, or report only.
+    joint_limits: JointLimits = field(default_factory=JointLimits)
 
     def validate(self) -> "Scenario":
         """Check every value (:func:`.validation.validate_scenario`: type, finiteness, range,

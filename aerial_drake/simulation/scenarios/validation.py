@@ -51,6 +51,7 @@ from aerial_drake.simulation.scenarios.checks import (
     OFFSET,
     OLD_TARGETS,
     PERIOD,
+    POSITION_LIMIT_MODES,
     POSITION_OFFSET,
     REALTIME,
     RELATIVE,
@@ -67,6 +68,7 @@ from aerial_drake.simulation.scenarios.checks import (
     TIME,
     TORQUE,
     TRAJECTORY,
+    VELOCITY_LIMIT_MODES,
     WINDOW,
     Range,
     RobotFacts,
@@ -103,6 +105,20 @@ def validate_scenario(s: Any) -> None:
     _check_controller(s.controller)
     check_perturbations(s, facts)
     check_world(s)
+    _check_joint_limits(s.joint_limits, s.plant.time_step)
+
+
+def _check_joint_limits(limits: Any, time_step: float) -> None:
+    """The modes of ``joint_limits``; "enforce" needs a discrete plant (Drake's continuous
+    MultibodyPlant does not hold a joint at its limit)."""
+    text("joint_limits.positions", limits.positions, POSITION_LIMIT_MODES)
+    text("joint_limits.velocities", limits.velocities, VELOCITY_LIMIT_MODES)
+    if limits.positions == "enforce" and time_step == 0:
+        raise ScenarioError(
+            "joint_limits.positions: 'enforce' needs a discrete plant (Drake's discrete "
+            "MultibodyPlant holds a joint at its limit; the continuous one, plant.time_step 0, "
+            "does not): set plant.time_step (e.g. 0.001), or choose 'stop' or 'report'",
+            "joint_limits.positions")
 
 
 def _check_window_count(s: Any) -> None:
