@@ -30,12 +30,12 @@ CONVERGED = {
     "com_error": 1e-3,              # measured 5.78e-4 (1.7x; the requirement)
     "base_attitude_error": 1e-3,    # measured 4.16e-4 (2.4x)
 }
-# The same on the orbit scenario (second trajectory).
+# The same on the orbit scenario (second trajectory; heading -0.15 rad/s since issue 31).
 CONVERGED_ORBIT = {
-    "ee_position_error": 1e-4,      # measured 3.58e-5 (2.8x)
-    "ee_orientation_error": 3e-5,   # measured 1.04e-5 (2.9x)
-    "com_error": 1e-3,              # measured 4.15e-4 (2.4x)
-    "base_attitude_error": 8e-4,    # measured 2.89e-4 (2.8x)
+    "ee_position_error": 1e-4,      # measured 2.93e-5 (3.4x)
+    "ee_orientation_error": 3e-5,   # measured 8.78e-6 (3.4x)
+    "com_error": 1e-3,              # measured 3.92e-4 (2.6x)
+    "base_attitude_error": 8e-4,    # measured 2.71e-4 (3.0x)
 }
 
 
@@ -72,7 +72,11 @@ def test_second_trajectory_converges():
         assert max_after(result, error, 5.0) < CONVERGED_ORBIT[error], error
     # q3 is held at the orbit's joint target (q3d) 0.2 rad, not the paper's 0.
     assert scenario.trajectory.joint_targets == [0.2]
-    assert abs(result.log["diagnostics"][-1, SL["y_tilde"]][6]) < 6e-7  # measured 2.09e-7
+    t = result.log["t"]
+    q3_error = result.log["diagnostics"][t >= 5.0, SL["y_tilde"]][:, 6]
+    # Over the last 5 s, not at one sample (it oscillates through zero): measured 1.39e-5
+    # (1.23e-5 at the former heading rate); held at the paper's 0 it would be 0.2.
+    assert np.abs(q3_error).max() < 4e-5
 
 
 def test_task_lyapunov_function_never_increases_with_continuous_feedback():
