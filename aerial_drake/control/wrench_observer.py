@@ -36,7 +36,6 @@ from pydrake.systems.framework import (
 
 from aerial_drake.dynamics.momentum_observer import (
     WRENCH_ESTIMATE_LAYOUT,
-    WRENCH_ESTIMATE_SIZE,
     ObserverSample,
     ObserverState,
     filter_pole,
@@ -78,14 +77,14 @@ class WrenchObserver(LeafSystem):
         # Started at the first state (p(0)); the first sample ends at t = period.
         self.DeclareInitializationDiscreteUpdateEvent(self._initialize)
         self.DeclarePeriodicDiscreteUpdateEvent(period, period, self._update)
-        self.DeclareVectorOutputPort(
-            "external_wrench_estimate", WRENCH_ESTIMATE_SIZE,
-            lambda c, out: out.SetFromVector(self._held(c).wrenches),
-            {self.discrete_state_ticket(self._memory)})
-        self.DeclareVectorOutputPort(
-            "generalized_force_estimate", nv,
-            lambda c, out: out.SetFromVector(self._held(c).r),
-            {self.discrete_state_ticket(self._memory)})
+        r_part, wrench_part = ObserverState.parts(nv)
+        for name, part in (("external_wrench_estimate", wrench_part),
+                           ("generalized_force_estimate", r_part)):
+            self.DeclareVectorOutputPort(
+                name, part.stop - part.start,
+                lambda c, out, part=part: out.SetFromVector(
+                    c.get_discrete_state(self._memory).value()[part]),
+                {self.discrete_state_ticket(self._memory)})
 
     def _held(self, context: Context) -> ObserverState:
         vector = context.get_discrete_state(self._memory).get_value()
@@ -96,15 +95,13 @@ class WrenchObserver(LeafSystem):
         x = self._state_port.Eval(context)
         plant, ctx = self._plant, self._context
         plant.SetPositionsAndVelocities(ctx, x)
-        X_WB = plant.EvalBodyPoseInWorld(ctx, self._base)
         world = plant.world_frame()
         return ObserverSample(
             M=plant.CalcMassMatrix(ctx), v=np.array(x[self._nq:]),
             bias=plant.CalcBiasTerm(ctx), g=-plant.CalcGravityGeneralizedForces(ctx),
-            R_WB=X_WB.rotation().matrix(),
+            R_WB=plant.EvalBodyPoseInWorld(ctx, self._base).rotation().matrix(),
             J_E=plant.CalcJacobianSpatialVelocity(ctx, JacobianWrtVariable.kV, self._frame,
-                                                  np.zeros(3), world, world),
-            p_BE_W=self._frame.CalcPoseInWorld(ctx).translation() - X_WB.translation())
+                                                  np.zeros(3), world, world))
 
     def _initialize(self, context: Context, discrete_state: DiscreteValues) -> None:
         state = ObserverState(np.zeros(ObserverState.size(self._nv)), self._nv)

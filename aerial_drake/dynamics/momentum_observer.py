@@ -87,7 +87,6 @@ class ObserverSample:
     g: np.ndarray  # gravity on the left of (1), g = -tau_g (nv)
     R_WB: np.ndarray  # base attitude (3, 3)
     J_E: np.ndarray  # (6, nv) Jacobian of the end-effector frame's [w; v] in World
-    p_BE_W: np.ndarray  # the end-effector frame's origin from the base origin, World (3)
 
 
 class ObserverState:
@@ -103,6 +102,11 @@ class ObserverState:
         r, w, M, v, b, R = (vector[e - s:e] for s, e in zip(sizes, ends))
         self.r, self.wrenches, self.v, self.bias_plus_g = r, w, v, b
         self.M, self.R_WB = M.reshape(nv, nv), R.reshape(3, 3)
+
+    @staticmethod
+    def parts(nv: int) -> tuple[slice, slice]:
+        """Where ``r`` and the wrenches are in the vector (the vector's first entries)."""
+        return slice(0, nv), slice(nv, nv + WRENCH_ESTIMATE_SIZE)
 
     @staticmethod
     def size(nv: int) -> int:
@@ -145,12 +149,12 @@ def step(state: ObserverState, sample: ObserverSample, command: np.ndarray, peri
     under the paper's end-effector wrench at 20 1/s, the arm turning at up to 1.2 rad/s)."""
     d = residual(state, sample, command, period)
     state.r[:] = pole * state.r + (1.0 - pole) * d
-    split = split_wrenches(d, sample.J_E, sample.p_BE_W)
+    split = split_wrenches(d, sample.J_E)
     state.wrenches[:] = pole * state.wrenches + (1.0 - pole) * split
     state.remember(sample)
 
 
-def split_wrenches(tau_ext: np.ndarray, J_E: np.ndarray, p_BE_W: np.ndarray) -> np.ndarray:
+def split_wrenches(tau_ext: np.ndarray, J_E: np.ndarray) -> np.ndarray:
     """The vehicle's and the end effector's World wrenches ``[torque; force]`` (12, in
     :data:`WRENCH_ESTIMATE_LAYOUT`'s order) whose generalized force is ``tau_ext``,
     assuming external forces act only at those two points: at the base frame's origin
@@ -161,13 +165,9 @@ def split_wrenches(tau_ext: np.ndarray, J_E: np.ndarray, p_BE_W: np.ndarray) -> 
     The arm's rows see only ``w_E``: ``tau_ext,arm = J_E,arm^T w_E``, solved by least squares
     (the pseudo-inverse: exact for six or more joints away from a singularity, the
     smallest-norm wrench for fewer); the vehicle's wrench is what is left on the base's rows,
-    ``tau_ext[:6] - J_E,base^T w_E``, i.e. minus ``w_E`` moved to the base origin
-    (``p_BE_W``: E from the base origin, World). A contact elsewhere on the arm is read as
-    the end-effector wrench that best explains its joint torques."""
+    ``tau_ext[:6] - J_E,base^T w_E`` (``J_E,base^T`` moves ``w_E`` to the base origin:
+    ``[torque + p_BE x force; force]``). A contact elsewhere on the arm is read as the
+    end-effector wrench that best explains its joint torques."""
     tau_ext = np.asarray(tau_ext, dtype=float)
     w_E = np.linalg.lstsq(J_E[:, 6:].T, tau_ext[6:], rcond=None)[0]
-    torque_E, force_E = w_E[:3], w_E[3:]
-    vehicle = tau_ext[:6].copy()
-    vehicle[:3] -= torque_E + np.cross(p_BE_W, force_E)
-    vehicle[3:] -= force_E
-    return np.concatenate([vehicle, w_E])
+    return np.concatenate([tau_ext[:6] - J_E[:, :6].T @ w_E, w_E])

@@ -14,7 +14,7 @@ from aerial_drake.robots.models import make_plant
 @pytest.fixture(scope="module")
 def posture():
     """The paper's robot at a random bent posture and attitude: its end-effector Jacobian
-    (World, [w; v] rows) and E's position from the base origin."""
+    (World, [w; v] rows) and E's position from the base origin (World)."""
     model = make_plant("rigid")
     plant = model.plant
     ctx = plant.CreateDefaultContext()
@@ -41,16 +41,21 @@ def test_split_recovers_a_vehicle_and_an_end_effector_wrench(posture):
     w_E = np.array([20.0, 20.0, 20.0, 40.0, 40.0, 40.0])
     tau_B = np.zeros(J_E.shape[1])
     tau_B[:6] = w_B
-    np.testing.assert_allclose(dut.split_wrenches(tau_B + J_E.T @ w_E, J_E, p_BE),
+    np.testing.assert_allclose(dut.split_wrenches(tau_B + J_E.T @ w_E, J_E),
                                np.concatenate([w_B, w_E]), atol=1e-9)
-    np.testing.assert_allclose(dut.split_wrenches(tau_B, J_E, p_BE),
+    np.testing.assert_allclose(dut.split_wrenches(tau_B, J_E),
                                np.concatenate([w_B, np.zeros(6)]), atol=1e-12)
-    np.testing.assert_allclose(dut.split_wrenches(J_E.T @ w_E, J_E, p_BE),
+    np.testing.assert_allclose(dut.split_wrenches(J_E.T @ w_E, J_E),
                                np.concatenate([np.zeros(6), w_E]), atol=1e-9)
+    # The base rows of J_E^T move w_E to the base origin: [torque + p_BE x force; force].
+    torque, force = w_E[:3], w_E[3:]
+    np.testing.assert_allclose(J_E[:, :6].T @ w_E,
+                               np.concatenate([torque + np.cross(p_BE, force), force]),
+                               atol=1e-12)
 
 
-def _sample(M, v, J_E, p_BE, bias, g):
-    return dut.ObserverSample(M=M, v=v, bias=bias, g=g, R_WB=np.eye(3), J_E=J_E, p_BE_W=p_BE)
+def _sample(M, v, J_E, bias, g):
+    return dut.ObserverSample(M=M, v=v, bias=bias, g=g, R_WB=np.eye(3), J_E=J_E)
 
 
 def test_a_constant_external_force_is_followed_as_one_minus_exp(posture):
@@ -58,7 +63,7 @@ def test_a_constant_external_force_is_followed_as_one_minus_exp(posture):
     h M^-1 (tau_act - C v - g + tau_ext) per sample, and the estimate after k samples is
     (1 - exp(-K_O k h)) tau_ext to round-off (the filter's exact discretization; explicit
     Euler's 1 - (1 - K_O h)^k is 1 % off at k = 3), the wrenches likewise."""
-    J_E, p_BE = posture
+    J_E, _ = posture
     nv = J_E.shape[1]
     rng = np.random.default_rng(3)
     A = rng.normal(size=(nv, nv))
@@ -71,12 +76,12 @@ def test_a_constant_external_force_is_followed_as_one_minus_exp(posture):
     K, h = 20.0, 1e-3
     state = dut.ObserverState(np.zeros(dut.ObserverState.size(nv)), nv)
     v = rng.normal(size=nv)
-    dut.start(state, _sample(M, v, J_E, p_BE, bias, g))
+    dut.start(state, _sample(M, v, J_E, bias, g))
     force = dut.actuation_force(np.eye(3), command) - bias - g + tau_ext
     pole = dut.filter_pole(K, h)
     for k in range(1, 201):
         v = v + h * np.linalg.solve(M, force)
-        dut.step(state, _sample(M, v, J_E, p_BE, bias, g), command, h, pole)
+        dut.step(state, _sample(M, v, J_E, bias, g), command, h, pole)
         scale = 1.0 - np.exp(-K * k * h)
         np.testing.assert_allclose(state.r, scale * tau_ext, rtol=1e-9, atol=1e-9)
         np.testing.assert_allclose(state.wrenches, scale * np.concatenate([w_B, w_E]),
