@@ -16,7 +16,8 @@ Ports of the closed loop (the Diagram's exported ports, or :meth:`ClosedLoop.inp
 - outputs ``plant_state``, ``command`` (what the controller asks for, held between samples),
   ``applied_command`` (what reaches the plant, after lag and saturation), ``diagnostics``,
   ``com_reference``, ``task_reference``, ``heading_reference``, ``query_object`` (for
-  visualisers), ``rotor_drive_torque`` (rotors variant only).
+  visualisers), ``rotor_drive_torque`` (rotors variant only), the wrench observer's
+  ``external_wrench_estimate`` and ``generalized_force_estimate`` (``observer.enabled`` only).
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ from aerial_drake.control.controller import DecoupledController
 from aerial_drake.control.interface import check_controller_ports
 from aerial_drake.control.registry import ControllerFactory, make_controller_system
 from aerial_drake.control.registry import controller_factory as scenario_controller_factory
+from aerial_drake.control.wrench_observer import add_scenario_observer
 from aerial_drake.robots.models import AerialManipulator, add_to_builder
 from aerial_drake.simulation.actuators import (
     ActuatorLag,
@@ -300,6 +302,7 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
 
     base_cmd, joint_cmd, applied, lag = _add_command_path(builder, scenario, model, command)
     outputs["applied_command"] = applied
+    outputs.update(add_scenario_observer(builder, scenario, model, measured, applied))
 
     # (2): thrust along body z and body torques, at the helicopter frame; joint torques.
     base_forces = connect_actuation(builder, sim, base_cmd, joint_cmd)
@@ -361,7 +364,8 @@ def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: 
 #: are functions of time alone, recomputed after the run from the sample times by the same
 #: compiled code (the run's ``ReferenceGenerator.source``, equal to the last bit), so nothing
 #: evaluates them in the loop but the controller.
-LOGGED_PORTS = ("plant_state", "command", "applied_command", "diagnostics", "rotor_drive_torque")
+LOGGED_PORTS = ("plant_state", "command", "applied_command", "diagnostics", "rotor_drive_torque",
+                "external_wrench_estimate", "generalized_force_estimate")
 
 
 def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = None,

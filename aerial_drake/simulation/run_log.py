@@ -13,6 +13,7 @@ from pydrake.systems.framework import Context
 from pydrake.systems.primitives import VectorLogSink
 
 from aerial_drake.control.law import AssumptionViolation, diagnostics_layout
+from aerial_drake.control.wrench_observer import observer_layouts
 from aerial_drake.simulation.diagram import ClosedLoop, input_limits
 from aerial_drake.simulation.failure_cause import arm_stretch, classify_failure, singular_stop
 from aerial_drake.simulation.joint_limits import ArmLimits, limit_metrics
@@ -77,6 +78,9 @@ def collect_log(scenario: Scenario, loop: ClosedLoop, loggers: dict[str, VectorL
         layouts["diagnostics"] = controller_diagnostics_layout(
             loop.controller, arrays["diagnostics"].shape[1], loop.controller_model.n)
     layouts["tracking"] = tracking.layout
+    # The wrench observer's estimates (observer.enabled): row k is the update of t_k-1's.
+    layouts.update((k, v) for k, v in observer_layouts(loop.controller_model.n).items()
+                   if k in arrays)
     return arrays, layouts
 
 

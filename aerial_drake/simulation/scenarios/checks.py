@@ -113,6 +113,8 @@ START_TIME = Range(0.0, 0.0, "s", fix="runs start at t = 0 (the reference's orig
 POSITION_OFFSET = Range(-1.0, 1.0, "m", fix="the shipped scenarios use 0.05 m")
 ANGLE_OFFSET = Range(-math.pi, math.pi, "rad", fix="the shipped scenarios use 0.05 rad")
 LAG = Range(0.0, 10.0, "s", fix="the paper's lag has a 0.1 s rise time; 0 = no lag")
+BANDWIDTH = Range(0.0, 1e4, "1/s", low_open=True,
+                  fix="20 1/s settles a step to 2 % in 0.2 s (docs/control.md)")
 THRUST = Range(0.0, 1e5, "N", fix="Table I: thrust in [0, 980.6] N")
 BODY_TORQUE = Range(0.0, 1e5, "N m", low_open=True, fix="Table I: 200 N m")
 ROTOR_SPEED = Range(-1e4, 1e4, "rad/s", fix="Table I: 26 pi = 81.68 rad/s")
@@ -213,6 +215,7 @@ class RobotFacts:
     rotor_variants: tuple[str, ...]  # the variants with rotor joints
     thrust: tuple[float, float]  # the robot's thrust range (N)
     joint_nominal: tuple[float, ...] = ()  # the task's joint components at the nominal posture
+    mass: float = 0.0  # the robot's total mass (kg), the controller model's
     #: Names of the robot's bodies with mass, per plant variant (model_mismatch.bodies).
     bodies: tuple[tuple[str, tuple[str, ...]], ...] = ()
 

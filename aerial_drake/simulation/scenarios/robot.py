@@ -65,6 +65,7 @@ def robot_facts(scenario: Any) -> RobotFacts:
                                  rotor_variants=rotor_variants,
                                  thrust=model.thrust_limits(),
                                  joint_nominal=tuple(model.task_joint_nominal()),
+                                 mass=model.total_mass(),
                                  bodies=tuple(bodies))
     return _FACTS[key]
 

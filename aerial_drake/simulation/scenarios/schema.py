@@ -39,8 +39,8 @@ from aerial_drake.simulation.scenarios.world import Environment, continuous_plan
 from aerial_drake.trajectories.params import TrajectoryParams
 
 __all__ = ["Scenario", "Disturbance", "InitialCondition", "Actuation", "Rotors",
-           "ControllerConfig", "JointLimits", "ModelMismatch", "Payload", "Wind", "Sensing",
-           "RandomDisturbances"]
+           "ControllerConfig", "JointLimits", "Observer", "ModelMismatch", "Payload", "Wind",
+           "Sensing", "RandomDisturbances"]
 
 
 @dataclass
@@ -115,6 +115,19 @@ class ControllerConfig:
 
 
 @dataclass
+class Observer:
+    """The external wrench observer (docs/control.md, "External wrench estimate"): a
+    generalized-momentum observer on the controller's model, sampled at controller_period.
+    Off by default: no system is added and the run is unchanged."""
+
+    # Add it to the run and log its estimate (log.npz's ``external_wrench_estimate``).
+    enabled: bool = False
+    # Its bandwidth K_O (1/s): the estimate follows a step of the external force as
+    # 1 - exp(-K_O t).
+    bandwidth: float = 20.0
+
+
+@dataclass
 class JointLimits:
     """What the arm's joint limits (its model files') do in a run (docs/reliability.md)."""
 
@@ -161,6 +174,8 @@ class Scenario:
     f_d_limit: float = F_D_LIMIT
     # The controller (default: the paper's).
     controller: ControllerConfig = field(default_factory=ControllerConfig)
+    # The external wrench observer (default: off).
+    observer: Observer = field(default_factory=Observer)
 
     # Refuse a run whose estimated log (held in memory) exceeds this (MB; docs/reliability.md).
     max_log_mb: float = DEFAULT_MAX_LOG_MB

@@ -27,6 +27,7 @@ from aerial_drake.simulation.scenarios.checks import (
     AIRSPEED,
     ANGLE_OFFSET,
     BALANCE_GRADE,
+    BANDWIDTH,
     BODY_TORQUE,
     COUNT,
     DELAY,
@@ -85,6 +86,7 @@ from aerial_drake.simulation.scenarios.checks import (
     vector,
 )
 from aerial_drake.simulation.scenarios.fields import find_array
+from aerial_drake.simulation.scenarios.gain_check import warn_gain_design
 from aerial_drake.simulation.scenarios.robot import robot_description, robot_facts
 from aerial_drake.simulation.scenarios.trajectory import check_trajectory
 from aerial_drake.simulation.scenarios.world import check_world
@@ -103,9 +105,11 @@ def validate_scenario(s: Any) -> None:
     check_values(s, facts)
     check_trajectory(s, np.array(facts.joint_nominal))
     _check_controller(s.controller)
+    _check_observer(s.observer, s.controller_period)
     check_perturbations(s, facts)
     check_world(s)
     _check_joint_limits(s.joint_limits, s.plant.time_step)
+    warn_gain_design(s, facts.mass)  # a warning, after every error
 
 
 def _check_joint_limits(limits: Any, time_step: float) -> None:
@@ -119,6 +123,16 @@ def _check_joint_limits(limits: Any, time_step: float) -> None:
             "MultibodyPlant holds a joint at its limit; the continuous one, plant.time_step 0, "
             "does not): set plant.time_step (e.g. 0.001), or choose 'stop' or 'report'",
             "joint_limits.positions")
+
+
+def _check_observer(observer: Any, period: float) -> None:
+    """The wrench observer runs at the controller's period: a sampled controller only."""
+    flag("observer.enabled", observer.enabled)
+    number("observer.bandwidth", observer.bandwidth, BANDWIDTH)
+    if observer.enabled and period == 0:
+        raise ScenarioError("observer.enabled: the observer samples at controller_period, "
+                            "which is 0 (continuous feedback): set controller_period (e.g. "
+                            "0.001) or disable the observer", "observer.enabled")
 
 
 def _check_window_count(s: Any) -> None:
