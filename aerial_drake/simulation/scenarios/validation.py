@@ -20,6 +20,7 @@ import numpy as np
 from pydrake.systems.analysis import GetIntegrationSchemes
 
 from aerial_drake.control.gains import GainError
+from aerial_drake.control.plus.params import PAPER_PLUS
 from aerial_drake.control.registry import controller_types
 from aerial_drake.robots.task import parse_task
 from aerial_drake.simulation.scenarios.checks import (
@@ -102,7 +103,7 @@ def validate_scenario(s: Any) -> None:
     facts = robot_facts(s)
     check_values(s, facts)
     check_trajectory(s, np.array(facts.joint_nominal))
-    _check_controller(s.controller)
+    _check_controller(s.controller, facts.n, s.controller_period)
     check_perturbations(s, facts)
     check_world(s)
     _check_joint_limits(s.joint_limits, s.plant.time_step)
@@ -154,15 +155,21 @@ def _check_gains(gains: Any, n_task: int, task_rows: tuple[int, ...]) -> None:
         raise ScenarioError(str(err), err.field) from None
 
 
-def _check_controller(controller: Any) -> None:
+def _check_controller(controller: Any, n: int, period: float) -> None:
+    """The type, and the baselines' and paper_plus's sections (``n``: the task's rows)."""
     types = controller_types()
     if controller.type not in types:
         raise ScenarioError(f"controller.type: '{controller.type}' is not one of {types}",
                             "controller.type")
+    if controller.type == PAPER_PLUS and period == 0:
+        raise ScenarioError(f"controller.type: {PAPER_PLUS} needs controller_period > 0 (its "
+                            "integrators are discrete state at that period); set "
+                            "controller_period, e.g. 0.001", "controller_period")
     try:
         controller.baseline.validate()
+        controller.plus.validate(n)
     except ValueError as err:
-        # The baseline's message starts with the field's dotted name.
+        # Each section's message starts with the field's dotted name.
         raise ScenarioError(str(err), str(err).split(" ", 1)[0]) from None
 
 
