@@ -149,6 +149,9 @@ def test_bad_options_are_refused_naming_the_field(field, value, words):
 def test_paper_plus_needs_a_sampled_controller_and_a_stable_com_gain():
     with pytest.raises(ScenarioError, match="paper_plus needs controller_period > 0"):
         run_scenario(_plus(_hover(1.0, controller_period=0.0)), progress=False)
+    with pytest.raises(ScenarioError, match=r"com_integral_gain\[0\] = 10000 .* unstable.*"
+                                            r"K_I < K_x D_x / m = 6131"):
+        run_scenario(_plus(_hover(1.0), com_integral_gain=[1e4] * 3), progress=False)
     model = make_plant("rigid")
     scenario = load_scenario("nominal")
     inf = np.full(11, np.inf)

@@ -91,14 +91,9 @@ class PaperPlusController(ControllerBase):
         self._k_x = np.asarray(params.com_gain(), float)
         self._k_y = np.asarray(params.task_gain(n), float)
         self._m = float(model.plant.CalcTotalMass(model.plant.CreateDefaultContext()))
-        # m s^3 + D s^2 + K s + K_I per CoM axis (23a with the integral): Hurwitz iff
-        # D K > m K_I (Routh).
-        for i, (k, K_i, D_i) in enumerate(zip(self._k_x, self._K_x, self._D_x)):
-            if not k * self._m < K_i * D_i:
-                raise ValueError(
-                    f"controller.plus.com_integral_gain[{i}] = {k:g} makes the CoM loop "
-                    f"unstable: m s^3 + D_x s^2 + K_x s + K_I needs K_I < K_x D_x / m = "
-                    f"{K_i * D_i / self._m:.4g} N/(m s) (m = {self._m:.4g} kg)")
+        unstable = params.com_gain_error(self._m, self._K_x, self._D_x)
+        if unstable:
+            raise ValueError(unstable)
         # The integral states' bounds: |K_I,x s_x| / m <= com limit, |K_I,y s_y| <= task limit
         # (entries with a zero gain stay at zero).
         with np.errstate(divide="ignore"):

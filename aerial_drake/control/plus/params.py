@@ -50,6 +50,19 @@ class PlusParams:
         """Whether any integral gain is nonzero."""
         return any(k != 0 for k in list(self.com_integral_gain) + list(self.task_integral_gain))
 
+    def com_gain_error(self, m: float, K_x: Any, D_x: Any, prefix: str = "controller.plus"
+                       ) -> str:
+        """Why the CoM integral gain destabilises the CoM loop of a robot of mass ``m``
+        (kg) under (10)'s diagonals ``K_x``, ``D_x``; empty if it does not. Per axis,
+        m s^3 + D_x s^2 + K_x s + K_I (23a with the integral) is Hurwitz iff
+        K_I < K_x D_x / m (Routh)."""
+        for i, (k, K, D) in enumerate(zip(self.com_gain(), K_x, D_x)):
+            if not k * m < K * D:
+                return (f"{prefix}.com_integral_gain[{i}] = {k:g} makes the CoM loop "
+                        f"unstable: m s^3 + D_x s^2 + K_x s + K_I needs K_I < K_x D_x / m = "
+                        f"{K * D / m:.4g} N/(m s) (m = {m:.4g} kg, gains.K_x and gains.D_x)")
+        return ""
+
     def validate(self, n: int, prefix: str = "controller.plus") -> "PlusParams":
         """Raise ValueError starting with the field's dotted name (``n``: the task's rows).
         Returns self."""

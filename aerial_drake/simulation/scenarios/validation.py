@@ -103,7 +103,7 @@ def validate_scenario(s: Any) -> None:
     facts = robot_facts(s)
     check_values(s, facts)
     check_trajectory(s, np.array(facts.joint_nominal))
-    _check_controller(s.controller, facts.n, s.controller_period)
+    _check_controller(s, facts.n)
     check_perturbations(s, facts)
     check_world(s)
     _check_joint_limits(s.joint_limits, s.plant.time_step)
@@ -155,8 +155,9 @@ def _check_gains(gains: Any, n_task: int, task_rows: tuple[int, ...]) -> None:
         raise ScenarioError(str(err), err.field) from None
 
 
-def _check_controller(controller: Any, n: int, period: float) -> None:
+def _check_controller(s: Any, n: int) -> None:
     """The type, and the baselines' and paper_plus's sections (``n``: the task's rows)."""
+    controller, period = s.controller, s.controller_period
     types = controller_types()
     if controller.type not in types:
         raise ScenarioError(f"controller.type: '{controller.type}' is not one of {types}",
@@ -171,6 +172,12 @@ def _check_controller(controller: Any, n: int, period: float) -> None:
     except ValueError as err:
         # Each section's message starts with the field's dotted name.
         raise ScenarioError(str(err), str(err).split(" ", 1)[0]) from None
+    if controller.type == PAPER_PLUS and any(controller.plus.com_gain()):
+        plant = s.controller_model().plant  # the bound needs the mass: built for this case
+        unstable = controller.plus.com_gain_error(
+            plant.CalcTotalMass(plant.CreateDefaultContext()), s.gains.K_x, s.gains.D_x)
+        if unstable:
+            raise ScenarioError(unstable, "controller.plus.com_integral_gain")
 
 
 def _target(field: str, value: Any) -> None:
