@@ -18,6 +18,7 @@ import inspect
 from typing import Any, Callable
 
 from aerial_drake.control.baselines.params import BASELINE_TYPES
+from aerial_drake.control.plus.params import PAPER_PLUS
 from aerial_drake.robots.models import AerialManipulator
 from aerial_drake.trajectories.base import ReferenceSource
 
@@ -36,6 +37,12 @@ def _paper(scenario: Any, model: AerialManipulator):
     from aerial_drake.control.controller import make_controller
     return make_controller(model, scenario.gains, sigma_min_J3_limit=scenario.sigma_min_J3_limit,
                            f_d_limit=scenario.f_d_limit, period=scenario.controller_period)
+
+
+def _paper_plus(scenario: Any, model: AerialManipulator):
+    from aerial_drake.control.limits import command_limits
+    from aerial_drake.control.plus.controller import make_paper_plus
+    return make_paper_plus(scenario, model, command_limits(scenario.actuation, model))
 
 
 def zero_controller(scenario: Any, model: AerialManipulator):
@@ -66,7 +73,7 @@ def _baseline(kind: str) -> ControllerFactory:
     return factory
 
 
-_REGISTRY: dict[str, ControllerFactory] = {PAPER_CONTROLLER: _paper}
+_REGISTRY: dict[str, ControllerFactory] = {PAPER_CONTROLLER: _paper, PAPER_PLUS: _paper_plus}
 _REGISTRY.update({kind: _baseline(kind) for kind in BASELINE_TYPES})
 _BUILT_IN = tuple(_REGISTRY)
 

@@ -41,6 +41,7 @@ from pydrake.systems.primitives import (
 
 from aerial_drake.control.controller import DecoupledController
 from aerial_drake.control.interface import check_controller_ports
+from aerial_drake.control.limits import command_limits
 from aerial_drake.control.registry import ControllerFactory, make_controller_system
 from aerial_drake.control.registry import controller_factory as scenario_controller_factory
 from aerial_drake.control.wrench_observer import add_scenario_observer
@@ -125,20 +126,7 @@ def input_limits(scenario: Scenario, model: AerialManipulator,
     """Lower and upper limits of the applied ``[f, mu, tau]``: the robot's thrust range and
     body torque bounds (its description, or the scenario's ``actuation`` overrides) and the
     arm's effort limits; infinite where the scenario does not saturate."""
-    a = scenario.actuation
-    effort = model.arm_effort_limits()
-    if not a.saturate:
-        inf = np.full(4 + effort.size, np.inf)
-        return -inf, inf
-    low, high = model.thrust_limits()
-    low = low if np.isnan(a.thrust_min) else a.thrust_min
-    high = high if np.isnan(a.thrust_max) else a.thrust_max
-    tm = model.body_torque_limits()
-    if not np.isnan(a.body_torque_max):
-        tm = np.full(3, a.body_torque_max)
-    lower = np.concatenate([[low], -tm, -effort])
-    upper = np.concatenate([[high], tm, effort])
-    return lower, upper
+    return command_limits(scenario.actuation, model)
 
 
 def _actuation_port(builder: DiagramBuilder, sim: AerialManipulator, actuators, name: str

@@ -306,7 +306,9 @@ class TrajectoryParams:
                 errors.append(f"'{name}' must be a finite float, got {value!r}")
             elif name.endswith(("_amplitude", "_frequency")) and value < 0:
                 errors.append(f"'{name}' must be >= 0, got {value!r}: use its magnitude")
-        if not all(_is_finite_number(x) for x in self.joint_targets):
+        targets = self.joint_targets
+        if not isinstance(targets, (list, tuple)) or not all(
+                _is_finite_number(x) for x in targets):
             errors.append(f"'joint_targets' must hold finite angles (rad), got "
                           f"{self.joint_targets!r}")
         return errors

@@ -19,6 +19,7 @@ from pydrake.systems.analysis import SimulatorConfig
 from aerial_drake.control.baselines.params import BaselineParams
 from aerial_drake.control.gains import Gains
 from aerial_drake.control.law import F_D_LIMIT, SIGMA_MIN_J3_LIMIT
+from aerial_drake.control.plus.params import PlusParams
 from aerial_drake.control.registry import PAPER_CONTROLLER
 from aerial_drake.robots.description import DEFAULT_ROBOT, RobotDescription
 from aerial_drake.robots.models import AerialManipulator, make_plant
@@ -107,11 +108,14 @@ class Rotors:
 class ControllerConfig:
     """Which controller closes the loop (docs/baselines.md); all use the scenario's gains."""
 
-    # "paper" (Section III), "uncoupled", "static_compensation", or a name registered with
-    # aerial_drake.control.registry.register_controller.
+    # "paper" (Section III), "paper_plus" (the paper's law with integral action and the
+    # vehicle-force feed-forward, docs/control.md), "uncoupled", "static_compensation", or a
+    # name registered with aerial_drake.control.registry.register_controller.
     type: str = PAPER_CONTROLLER
     # The baselines' own parameters (used by "uncoupled" and "static_compensation").
     baseline: BaselineParams = field(default_factory=BaselineParams)
+    # paper_plus's options (used by "paper_plus"; the defaults are all off).
+    plus: PlusParams = field(default_factory=PlusParams)
 
 
 @dataclass

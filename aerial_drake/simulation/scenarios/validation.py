@@ -20,14 +20,12 @@ import numpy as np
 from pydrake.systems.analysis import GetIntegrationSchemes
 
 from aerial_drake.control.gains import GainError
-from aerial_drake.control.registry import controller_types
 from aerial_drake.robots.task import parse_task
 from aerial_drake.simulation.scenarios.checks import (
     ACCURACY,
     AIRSPEED,
     ANGLE_OFFSET,
     BALANCE_GRADE,
-    BANDWIDTH,
     BODY_TORQUE,
     COUNT,
     DELAY,
@@ -85,6 +83,7 @@ from aerial_drake.simulation.scenarios.checks import (
     text,
     vector,
 )
+from aerial_drake.simulation.scenarios.control_checks import check_controller, check_observer
 from aerial_drake.simulation.scenarios.fields import find_array
 from aerial_drake.simulation.scenarios.gain_check import warn_gain_design
 from aerial_drake.simulation.scenarios.robot import robot_description, robot_facts
@@ -104,8 +103,8 @@ def validate_scenario(s: Any) -> None:
     facts = robot_facts(s)
     check_values(s, facts)
     check_trajectory(s, np.array(facts.joint_nominal))
-    _check_controller(s.controller)
-    _check_observer(s.observer, s.controller_period)
+    check_controller(s, facts.n)
+    check_observer(s.observer, s.controller_period)
     check_perturbations(s, facts)
     check_world(s)
     _check_joint_limits(s.joint_limits, s.plant.time_step)
@@ -123,16 +122,6 @@ def _check_joint_limits(limits: Any, time_step: float) -> None:
             "MultibodyPlant holds a joint at its limit; the continuous one, plant.time_step 0, "
             "does not): set plant.time_step (e.g. 0.001), or choose 'stop' or 'report'",
             "joint_limits.positions")
-
-
-def _check_observer(observer: Any, period: float) -> None:
-    """The wrench observer runs at the controller's period: a sampled controller only."""
-    flag("observer.enabled", observer.enabled)
-    number("observer.bandwidth", observer.bandwidth, BANDWIDTH)
-    if observer.enabled and period == 0:
-        raise ScenarioError("observer.enabled: the observer samples at controller_period, "
-                            "which is 0 (continuous feedback): set controller_period (e.g. "
-                            "0.001) or disable the observer", "observer.enabled")
 
 
 def _check_window_count(s: Any) -> None:
@@ -166,18 +155,6 @@ def _check_gains(gains: Any, n_task: int, task_rows: tuple[int, ...]) -> None:
         gains.validate(n_task, "gains", task_rows)
     except GainError as err:
         raise ScenarioError(str(err), err.field) from None
-
-
-def _check_controller(controller: Any) -> None:
-    types = controller_types()
-    if controller.type not in types:
-        raise ScenarioError(f"controller.type: '{controller.type}' is not one of {types}",
-                            "controller.type")
-    try:
-        controller.baseline.validate()
-    except ValueError as err:
-        # The baseline's message starts with the field's dotted name.
-        raise ScenarioError(str(err), str(err).split(" ", 1)[0]) from None
 
 
 def _target(field: str, value: Any) -> None:

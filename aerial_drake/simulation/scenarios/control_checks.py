@@ -1,0 +1,45 @@
+"""The scenario's controller and observer sections, checked for :mod:`.validation` (its one
+validation pass): the controller type and its options, and the wrench observer's."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from aerial_drake.control.plus.params import PAPER_PLUS
+from aerial_drake.control.registry import controller_types
+from aerial_drake.simulation.scenarios.checks import BANDWIDTH, ScenarioError, flag, number
+
+
+def check_controller(s: Any, n: int) -> None:
+    """The type, and the baselines' and paper_plus's sections (``n``: the task's rows)."""
+    controller, period = s.controller, s.controller_period
+    types = controller_types()
+    if controller.type not in types:
+        raise ScenarioError(f"controller.type: '{controller.type}' is not one of {types}",
+                            "controller.type")
+    if controller.type == PAPER_PLUS and period == 0:
+        raise ScenarioError(f"controller.type: {PAPER_PLUS} needs controller_period > 0 (its "
+                            "integrators are discrete state at that period); set "
+                            "controller_period, e.g. 0.001", "controller_period")
+    try:
+        controller.baseline.validate()
+        controller.plus.validate(n)
+    except ValueError as err:
+        # Each section's message starts with the field's dotted name.
+        raise ScenarioError(str(err), str(err).split(" ", 1)[0]) from None
+    if controller.type == PAPER_PLUS and any(controller.plus.com_gain()):
+        plant = s.controller_model().plant  # the bound needs the mass: built for this case
+        unstable = controller.plus.com_gain_error(
+            plant.CalcTotalMass(plant.CreateDefaultContext()), s.gains.K_x, s.gains.D_x)
+        if unstable:
+            raise ScenarioError(unstable, "controller.plus.com_integral_gain")
+
+
+def check_observer(observer: Any, period: float) -> None:
+    """The wrench observer runs at the controller's period: a sampled controller only."""
+    flag("observer.enabled", observer.enabled)
+    number("observer.bandwidth", observer.bandwidth, BANDWIDTH)
+    if observer.enabled and period == 0:
+        raise ScenarioError("observer.enabled: the observer samples at controller_period, "
+                            "which is 0 (continuous feedback): set controller_period (e.g. "
+                            "0.001) or disable the observer", "observer.enabled")
