@@ -76,3 +76,16 @@ def test_a_failed_run_says_its_cause(tmp_path, capsys, monkeypatch):
     note = json.loads(out)["error"]["note"]
     assert note.startswith("cause: other (t = 0.1350 s: no joint limit") and "logs up to" in note
     assert "cause: other" in err
+
+
+def test_a_warning_prints_as_one_line_naming_its_category(tmp_path, capsys):
+    """A scenario's warning (Table II's gains: the attitude loop slower than the CoM's) is one
+    line on stderr, 'warning (Category): message', without the package's source line."""
+    from aerial_drake import cli
+    status = cli.main(["run", "nominal", "--duration", "0.01", "--out", str(tmp_path),
+                       "--quiet", "--no-plots"])
+    err = capsys.readouterr().err
+    assert status == 0
+    lines = [x for x in err.splitlines() if "GainDesignWarning" in x]
+    assert lines and lines[0].startswith("warning (GainDesignWarning): gains: the attitude")
+    assert "warn_gain_design(" not in err and ".py:" not in err

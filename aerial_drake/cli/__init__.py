@@ -14,10 +14,21 @@ statuses; :mod:`.restart` compiles on the first run and restarts.
 
 from __future__ import annotations
 
+import sys
+import warnings
+from typing import TextIO
+
 from aerial_drake.cli.errors import report_error
 from aerial_drake.cli.parser import build_parser
 
 __all__ = ["build_parser", "main"]
+
+
+def _one_line_warning(message: Warning | str, category: type[Warning], filename: str,
+                      lineno: int, file: TextIO | None = None, line: str | None = None) -> None:
+    """A warning as the command line prints it: ``warning (Category): message``."""
+    (file if file is not None else sys.stderr).write(
+        f"warning ({category.__name__}): {message}\n")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -30,7 +41,9 @@ def main(argv: list[str] | None = None) -> int:
     # Run as a program (its arguments from the command line): compile_first may restart it.
     args.restartable = argv is None
     try:
-        with handling():  # SIGINT, SIGTERM, SIGHUP: aerial_drake.simulation.interrupts
+        with handling(), warnings.catch_warnings():  # SIGINT, SIGTERM, SIGHUP: interrupts
+            if not args.debug:  # a warning as one line, not the package's source line
+                warnings.showwarning = _one_line_warning
             return args.func(args)
     except KeyboardInterrupt as err:
         # One in the simulation is handled by the runner (logs written, exit 128 + signal);
