@@ -148,3 +148,16 @@ def gain_design_message(roots: LoopRoots, inertia_source: str,
         f"root at or left of {-factor * abs(com.real):.3g} 1/s), or the CoM loop slower, "
         f"e.g. K_x = {K_x:g}, D_x = {D_x:g} on each axis (a double root at "
         f"{-abs(att.real) / factor:.3g} 1/s)")
+
+
+def warn_if_slow(mass: float, gains, attitude_inertia, inertia_source: str,
+                 stacklevel: int = 3) -> LoopRoots:
+    """Warn (:class:`GainDesignWarning`, with :func:`gain_design_message`) when ``gains``'
+    attitude loop, of ``attitude_inertia``, is too slow against their CoM loop on a robot of
+    ``mass``; returns the roots."""
+    import warnings
+    roots = loop_roots(mass, gains.K_x, gains.D_x, gains.k_R, gains.k_w, attitude_inertia)
+    message = gain_design_message(roots, inertia_source)
+    if message is not None:
+        warnings.warn(message, GainDesignWarning, stacklevel=stacklevel)
+    return roots

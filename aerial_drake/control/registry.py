@@ -17,6 +17,8 @@ from __future__ import annotations
 import inspect
 from typing import Any, Callable
 
+import numpy as np
+
 from aerial_drake.control.baselines.params import BASELINE_TYPES
 from aerial_drake.control.plus.params import PAPER_PLUS
 from aerial_drake.robots.models import AerialManipulator
@@ -28,6 +30,8 @@ ControllerFactory = Callable[[Any, AerialManipulator], object]
 
 #: ``controller.type`` of the paper's controller (Section III), the default.
 PAPER_CONTROLLER = "paper"
+#: Where a baseline's attitude inertia comes from, as its gain-design warning says.
+LOCKED_SOURCE = "(the robot locked at its start, principal moments)"
 
 
 # The controllers' modules are imported when a loop is built, not when a scenario is loaded
@@ -64,11 +68,18 @@ def _baseline(kind: str) -> ControllerFactory:
         )
         assert model.task is not None
         q0 = reference_configuration(scenario, model, reference=reference)
+        J = locked_inertia(model.plant, model.base_body, q0)
+        if not scenario.controller.baseline.vehicle_inertia:
+            # Checked here, not at load: the locked inertia needs the run's reference.
+            from aerial_drake.control.gain_design import warn_if_slow
+            plant = model.plant
+            warn_if_slow(plant.CalcTotalMass(plant.CreateDefaultContext()), scenario.gains,
+                         np.linalg.eigvalsh(J), LOCKED_SOURCE)
         return BaselineController(
             model.plant, model.base_body, model.end_effector_frame, model.task,
             scenario.gains, kind=kind,
             body_offset_H=body_offset_in_heading_frame(scenario, model, reference),
-            locked_inertia=locked_inertia(model.plant, model.base_body, q0),
+            locked_inertia=J,
             params=scenario.controller.baseline, period=scenario.controller_period)
     return factory
 

@@ -37,24 +37,24 @@ def scenario_loop_roots(s: Any, mass: float) -> tuple[LoopRoots, str] | None:
     if kind in LAW_16_TYPES:
         inertia, source = np.asarray(g.Lambda2_bar, float), "(gains.Lambda2_bar, by (16))"
     elif kind in BASELINE_TYPES:
-        inertia, source = _baseline_inertia(s)
+        found = _baseline_inertia(s)
+        if found is None:
+            return None
+        inertia, source = found
     else:
         return None
     return loop_roots(mass, g.K_x, g.D_x, g.k_R, g.k_w, inertia), source
 
 
-def _baseline_inertia(s: Any) -> tuple[np.ndarray, str]:
-    """The principal moments of the inertia the baselines' vehicle law assumes: the given
-    ``controller.baseline.vehicle_inertia``, else the robot locked at its start about its
-    CoM (as :func:`aerial_drake.control.registry` builds them)."""
+def _baseline_inertia(s: Any) -> tuple[np.ndarray, str] | None:
+    """The principal moments of the inertia the baselines' vehicle law assumes, when given
+    (``controller.baseline.vehicle_inertia``); None for the default, the robot locked at its
+    start, which needs the run's reference: checked where the registry builds the
+    baseline (:mod:`aerial_drake.control.registry`)."""
     given = s.controller.baseline.vehicle_inertia
     if given:
         return np.asarray(given, float), "(controller.baseline.vehicle_inertia)"
-    from aerial_drake.control.baselines.tuning import locked_inertia
-    from aerial_drake.control.reference_pose import reference_configuration
-    model = s.controller_model()
-    J = locked_inertia(model.plant, model.base_body, reference_configuration(s, model))
-    return np.linalg.eigvalsh(J), "(the robot locked at its start, principal moments)"
+    return None
 
 
 def warn_gain_design(s: Any, mass: float) -> LoopRoots | None:
