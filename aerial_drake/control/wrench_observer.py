@@ -13,11 +13,14 @@ Ports (by name):
   effector's (World axes, at the end-effector frame's origin, as ``end_effector_wrench``),
   each ``[torque; force]``: :data:`~aerial_drake.dynamics.momentum_observer.
   WRENCH_ESTIMATE_LAYOUT`;
-- output ``generalized_force_estimate`` (nv): the raw estimate ``r`` of ``tau_ext``.
+- output ``generalized_force_estimate`` (nv): the raw estimate ``r`` of ``tau_ext``;
+- output ``vehicle_force_estimate`` (3): the vehicle's force alone (N, World), entries 3-5 of
+  ``external_wrench_estimate``: what ``paper_plus``'s input of that name feeds forward.
 
-Both outputs are held discrete state (no direct feedthrough), so a controller may feed on them
+The outputs are held discrete state (no direct feedthrough), so a controller may feed on them
 without an algebraic loop. :func:`add_wrench_observer` adds one to a builder;
-:func:`add_scenario_observer` as a scenario's ``observer`` section asks.
+:func:`add_scenario_observer` as a scenario's ``observer`` section asks, and connects the
+vehicle force to the controller's input of that name.
 """
 
 from __future__ import annotations
@@ -32,6 +35,7 @@ from pydrake.systems.framework import (
     DiscreteValues,
     LeafSystem,
     OutputPort,
+    System,
 )
 
 from aerial_drake.dynamics.momentum_observer import (
@@ -45,7 +49,21 @@ from aerial_drake.dynamics.momentum_observer import (
 from aerial_drake.robots.models import AerialManipulator
 
 #: The observer's output ports, by name.
-OBSERVER_OUTPUTS = ("external_wrench_estimate", "generalized_force_estimate")
+OBSERVER_OUTPUTS = ("external_wrench_estimate", "generalized_force_estimate",
+                    "vehicle_force_estimate")
+#: The controller input port the observer's vehicle force feeds (paper_plus's).
+FORCE_INPUT = "vehicle_force_estimate"
+
+
+def _vehicle_force_part(wrench_part: slice) -> slice:
+    """Where the vehicle's force is in the observer's state: within ``wrench_part``, at
+    :data:`WRENCH_ESTIMATE_LAYOUT`'s ``vehicle_force``."""
+    start = wrench_part.start
+    for name, size in WRENCH_ESTIMATE_LAYOUT:
+        if name == "vehicle_force":
+            return slice(start, start + size)
+        start += size
+    raise AssertionError("WRENCH_ESTIMATE_LAYOUT has no vehicle_force")
 
 
 def observer_layouts(n: int) -> dict[str, tuple[tuple[str, int], ...]]:
@@ -79,7 +97,8 @@ class WrenchObserver(LeafSystem):
         self.DeclarePeriodicDiscreteUpdateEvent(period, period, self._update)
         r_part, wrench_part = ObserverState.parts(nv)
         for name, part in (("external_wrench_estimate", wrench_part),
-                           ("generalized_force_estimate", r_part)):
+                           ("generalized_force_estimate", r_part),
+                           ("vehicle_force_estimate", _vehicle_force_part(wrench_part))):
             self.DeclareVectorOutputPort(
                 name, part.stop - part.start,
                 lambda c, out, part=part: out.SetFromVector(
@@ -135,14 +154,24 @@ def add_wrench_observer(builder: DiagramBuilder, model: AerialManipulator, bandw
 
 def add_scenario_observer(builder: DiagramBuilder, scenario: Any, model: AerialManipulator,
                           state: OutputPort, applied_command: OutputPort,
-                          ) -> dict[str, OutputPort]:
+                          controller: System | None = None) -> dict[str, OutputPort]:
     """The observer of ``scenario``'s ``observer`` section (a
     :class:`~aerial_drake.simulation.scenarios.Scenario`; not imported here: the simulation
     layer is above this one), at its ``controller_period``: its outputs by name, or none when
-    the section does not enable it (nothing is added)."""
+    the section does not enable it (nothing is added).
+
+    When ``controller`` (a system in ``builder``) has an input port ``vehicle_force_estimate``
+    (paper_plus's), the observer's output of that name is connected to it: paper_plus reads
+    it only with ``controller.plus.vehicle_force_feedforward`` (docs/control.md, "Push
+    rejection"). Both sides hold their values between samples, so this closes no algebraic
+    loop: the controller's sample at t_k reads the estimate the observer's update at t_k-1
+    left (the momentum change over t_k-2 .. t_k-1, filtered)."""
     config = scenario.observer
     if not config.enabled:
         return {}
     observer = add_wrench_observer(builder, model, config.bandwidth, scenario.controller_period,
                                    state, applied_command)
-    return {name: observer.GetOutputPort(name) for name in OBSERVER_OUTPUTS}
+    outputs = {name: observer.GetOutputPort(name) for name in OBSERVER_OUTPUTS}
+    if controller is not None and controller.HasInputPort(FORCE_INPUT):
+        builder.Connect(outputs[FORCE_INPUT], controller.GetInputPort(FORCE_INPUT))
+    return outputs
