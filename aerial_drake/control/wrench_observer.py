@@ -92,9 +92,14 @@ class WrenchObserver(LeafSystem):
         self._state_port = self.DeclareVectorInputPort("state", self._nq + nv)
         self._command_port = self.DeclareVectorInputPort("applied_command", nv - 2)
         self._memory = self.DeclareDiscreteState(ObserverState.size(nv))
-        # Started at the first state (p(0)); the first sample ends at t = period.
+        # Started at the first state (p(0)); the first sample ends at t = period. The
+        # periodic event has the controller's offset, 0, so that both compute the same event
+        # times to the bit (offset period gives period + k period, which can differ from
+        # (k + 1) period in the last bit and split an integrator step: the paper law's
+        # command then changed at 1e-14 with the observer on); the update at the start time
+        # keeps the initialized state (_update).
         self.DeclareInitializationDiscreteUpdateEvent(self._initialize)
-        self.DeclarePeriodicDiscreteUpdateEvent(period, period, self._update)
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
         r_part, wrench_part = ObserverState.parts(nv)
         for name, part in (("external_wrench_estimate", wrench_part),
                            ("generalized_force_estimate", r_part),
@@ -129,6 +134,8 @@ class WrenchObserver(LeafSystem):
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> None:
         state = self._held(context)
+        if context.get_time() < 0.5 * self.period:
+            return  # the start's sample (runs start at 0): no interval yet, state kept
         step(state, self._sample(context), self._command_port.Eval(context), self.period,
              self._pole)
         discrete_state.set_value(self._memory, state.vector)
