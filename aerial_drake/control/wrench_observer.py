@@ -14,13 +14,15 @@ Ports (by name):
   each ``[torque; force]``: :data:`~aerial_drake.dynamics.momentum_observer.
   WRENCH_ESTIMATE_LAYOUT`;
 - output ``generalized_force_estimate`` (nv): the raw estimate ``r`` of ``tau_ext``;
-- output ``vehicle_force_estimate`` (3): the vehicle's force alone (N, World), entries 3-5 of
-  ``external_wrench_estimate``: what ``paper_plus``'s input of that name feeds forward.
+- output ``external_force_estimate`` (3): the whole external force on the robot (N, World),
+  the vehicle's force plus the end effector's (entries 3-5 and 9-11 of
+  ``external_wrench_estimate``): the force the CoM's dynamics (9a) see, which ``paper_plus``
+  feeds forward into (10) through its input ``vehicle_force_estimate``.
 
 The outputs are held discrete state (no direct feedthrough), so a controller may feed on them
 without an algebraic loop. :func:`add_wrench_observer` adds one to a builder;
 :func:`add_scenario_observer` as a scenario's ``observer`` section asks, and connects the
-vehicle force to the controller's input of that name.
+external force to the controller's ``vehicle_force_estimate`` input.
 """
 
 from __future__ import annotations
@@ -50,20 +52,20 @@ from aerial_drake.robots.models import AerialManipulator
 
 #: The observer's output ports, by name.
 OBSERVER_OUTPUTS = ("external_wrench_estimate", "generalized_force_estimate",
-                    "vehicle_force_estimate")
-#: The controller input port the observer's vehicle force feeds (paper_plus's).
+                    "external_force_estimate")
+#: The controller input port the observer's external force feeds (paper_plus's).
 FORCE_INPUT = "vehicle_force_estimate"
 
 
-def _vehicle_force_part(wrench_part: slice) -> slice:
-    """Where the vehicle's force is in the observer's state: within ``wrench_part``, at
-    :data:`WRENCH_ESTIMATE_LAYOUT`'s ``vehicle_force``."""
-    start = wrench_part.start
+def _force_parts(wrench_part: slice) -> tuple[slice, slice]:
+    """Where the vehicle's and the end effector's forces are in the observer's state: within
+    ``wrench_part``, at :data:`WRENCH_ESTIMATE_LAYOUT`'s ``vehicle_force`` and
+    ``end_effector_force``."""
+    starts, start = {}, wrench_part.start
     for name, size in WRENCH_ESTIMATE_LAYOUT:
-        if name == "vehicle_force":
-            return slice(start, start + size)
+        starts[name] = slice(start, start + size)
         start += size
-    raise AssertionError("WRENCH_ESTIMATE_LAYOUT has no vehicle_force")
+    return starts["vehicle_force"], starts["end_effector_force"]
 
 
 def observer_layouts(n: int) -> dict[str, tuple[tuple[str, int], ...]]:
@@ -101,14 +103,19 @@ class WrenchObserver(LeafSystem):
         self.DeclareInitializationDiscreteUpdateEvent(self._initialize)
         self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
         r_part, wrench_part = ObserverState.parts(nv)
+        held = {self.discrete_state_ticket(self._memory)}  # no direct feedthrough
         for name, part in (("external_wrench_estimate", wrench_part),
-                           ("generalized_force_estimate", r_part),
-                           ("vehicle_force_estimate", _vehicle_force_part(wrench_part))):
+                           ("generalized_force_estimate", r_part)):
             self.DeclareVectorOutputPort(
                 name, part.stop - part.start,
                 lambda c, out, part=part: out.SetFromVector(
-                    c.get_discrete_state(self._memory).value()[part]),
-                {self.discrete_state_ticket(self._memory)})
+                    c.get_discrete_state(self._memory).value()[part]), held)
+        vehicle, end_effector = _force_parts(wrench_part)
+        self.DeclareVectorOutputPort(
+            "external_force_estimate", 3,
+            lambda c, out: out.SetFromVector(
+                c.get_discrete_state(self._memory).value()[vehicle]
+                + c.get_discrete_state(self._memory).value()[end_effector]), held)
 
     def _held(self, context: Context) -> ObserverState:
         vector = context.get_discrete_state(self._memory).get_value()
@@ -168,8 +175,9 @@ def add_scenario_observer(builder: DiagramBuilder, scenario: Any, model: AerialM
     the section does not enable it (nothing is added).
 
     When ``controller`` (a system in ``builder``) has an input port ``vehicle_force_estimate``
-    (paper_plus's), the observer's output of that name is connected to it: paper_plus reads
-    it only with ``controller.plus.vehicle_force_feedforward`` (docs/control.md, "Push
+    (paper_plus's), the observer's ``external_force_estimate`` is connected to it: the
+    vehicle's and the end effector's forces, as both move the CoM (9a); paper_plus reads it
+    only with ``controller.plus.vehicle_force_feedforward`` (docs/control.md, "Push
     rejection"). Both sides hold their values between samples, so this closes no algebraic
     loop: the controller's sample at t_k reads the estimate the observer's update at t_k-1
     left (the momentum change over t_k-2 .. t_k-1, filtered)."""
@@ -180,5 +188,5 @@ def add_scenario_observer(builder: DiagramBuilder, scenario: Any, model: AerialM
                                    state, applied_command)
     outputs = {name: observer.GetOutputPort(name) for name in OBSERVER_OUTPUTS}
     if controller is not None and controller.HasInputPort(FORCE_INPUT):
-        builder.Connect(outputs[FORCE_INPUT], controller.GetInputPort(FORCE_INPUT))
+        builder.Connect(outputs["external_force_estimate"], controller.GetInputPort(FORCE_INPUT))
     return outputs

@@ -17,9 +17,9 @@ Ports of the closed loop (the Diagram's exported ports, or :meth:`ClosedLoop.inp
   ``applied_command`` (what reaches the plant, after lag and saturation), ``diagnostics``,
   ``com_reference``, ``task_reference``, ``heading_reference``, ``query_object`` (for
   visualisers), ``rotor_drive_torque`` (rotors variant only), the wrench observer's
-  ``external_wrench_estimate``, ``generalized_force_estimate`` and ``vehicle_force_estimate``
-  (``observer.enabled`` only; the last also feeds the controller's input of that name if it
-  has one, paper_plus's).
+  ``external_wrench_estimate``, ``generalized_force_estimate`` and ``external_force_estimate``
+  (``observer.enabled`` only; the last also feeds the controller's ``vehicle_force_estimate``
+  input if it has one, paper_plus's).
 """
 
 from __future__ import annotations

@@ -46,8 +46,9 @@ def _errors(result):
 def test_the_observed_push_fed_forward_keeps_the_com_near_its_reference():
     """The paper's CoM is pushed 248 mm away (peak 0.23 s after the push ends); fed the
     observer's estimate (bandwidth 20 1/s, a sample late), paper_plus's peaks at 49 mm (the
-    helper's true force on the port: 35 mm; the rest is the estimate's 50 ms lag), and the
-    end effector is held as well as the paper's law holds it. Cost: two 2 s runs."""
+    true force on the port: 35 mm; the rest is the estimate's 50 ms lag) and is at 23 mm at
+    2 s (the paper's at 179 mm), and the end effector errs less than under the paper's law
+    (0.81 against 1.41 mm). Cost: two 2 s runs."""
     scenario = _hover(2.0)
     paper = run_scenario(scenario, progress=False)
     plus = run_scenario(_defended(scenario), progress=False)
@@ -55,7 +56,7 @@ def test_the_observed_push_fed_forward_keeps_the_com_near_its_reference():
     (com_paper, ee_paper), (com_plus, ee_plus) = _errors(paper), _errors(plus)
     assert 0.22 < com_paper.max() < 0.28  # measured 248.3 mm
     assert com_plus.max() < 0.25 * com_paper.max()  # measured 48.8 mm: 5.1x less
-    assert ee_plus.max() < 1.5 * ee_paper.max()  # measured MEASURE mm, the paper's 1.41 mm
+    assert ee_plus.max() < ee_paper.max()  # measured 0.81 mm, the paper's 1.41 mm
     # What was fed forward is the observer's estimate: the push, once the filter has settled.
     t = plus.log["t"]
     fed = entries(plus.log["diagnostics"], plus.layouts["diagnostics"])[
