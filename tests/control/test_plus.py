@@ -9,9 +9,9 @@ import pytest
 from pydrake.systems.primitives import ConstantVectorSource
 
 from aerial_drake.control.controller import task_jacobian
+from aerial_drake.control.limits import command_limits
 from aerial_drake.control.plus import PlusParams
 from aerial_drake.control.plus import shaping as dut
-from aerial_drake.control.limits import command_limits
 from aerial_drake.control.plus.controller import PaperPlusController, make_paper_plus
 from aerial_drake.dynamics.decoupling import DecoupledDynamics
 from aerial_drake.robots.models import make_plant
