@@ -13,11 +13,16 @@ Ports (by name):
   effector's (World axes, at the end-effector frame's origin, as ``end_effector_wrench``),
   each ``[torque; force]``: :data:`~aerial_drake.dynamics.momentum_observer.
   WRENCH_ESTIMATE_LAYOUT`;
-- output ``generalized_force_estimate`` (nv): the raw estimate ``r`` of ``tau_ext``.
+- output ``generalized_force_estimate`` (nv): the raw estimate ``r`` of ``tau_ext``;
+- output ``external_force_estimate`` (3): the whole external force on the robot (N, World),
+  the vehicle's force plus the end effector's (entries 3-5 and 9-11 of
+  ``external_wrench_estimate``): the force the CoM's dynamics (9a) see, which ``paper_plus``
+  feeds forward into (10) through its input ``vehicle_force_estimate``.
 
-Both outputs are held discrete state (no direct feedthrough), so a controller may feed on them
+The outputs are held discrete state (no direct feedthrough), so a controller may feed on them
 without an algebraic loop. :func:`add_wrench_observer` adds one to a builder;
-:func:`add_scenario_observer` as a scenario's ``observer`` section asks.
+:func:`add_scenario_observer` as a scenario's ``observer`` section asks, and connects the
+external force to the controller's ``vehicle_force_estimate`` input.
 """
 
 from __future__ import annotations
@@ -32,6 +37,7 @@ from pydrake.systems.framework import (
     DiscreteValues,
     LeafSystem,
     OutputPort,
+    System,
 )
 
 from aerial_drake.dynamics.momentum_observer import (
@@ -45,7 +51,21 @@ from aerial_drake.dynamics.momentum_observer import (
 from aerial_drake.robots.models import AerialManipulator
 
 #: The observer's output ports, by name.
-OBSERVER_OUTPUTS = ("external_wrench_estimate", "generalized_force_estimate")
+OBSERVER_OUTPUTS = ("external_wrench_estimate", "generalized_force_estimate",
+                    "external_force_estimate")
+#: The controller input port the observer's external force feeds (paper_plus's).
+FORCE_INPUT = "vehicle_force_estimate"
+
+
+def _force_parts(wrench_part: slice) -> tuple[slice, slice]:
+    """Where the vehicle's and the end effector's forces are in the observer's state: within
+    ``wrench_part``, at :data:`WRENCH_ESTIMATE_LAYOUT`'s ``vehicle_force`` and
+    ``end_effector_force``."""
+    starts, start = {}, wrench_part.start
+    for name, size in WRENCH_ESTIMATE_LAYOUT:
+        starts[name] = slice(start, start + size)
+        start += size
+    return starts["vehicle_force"], starts["end_effector_force"]
 
 
 def observer_layouts(n: int) -> dict[str, tuple[tuple[str, int], ...]]:
@@ -74,17 +94,28 @@ class WrenchObserver(LeafSystem):
         self._state_port = self.DeclareVectorInputPort("state", self._nq + nv)
         self._command_port = self.DeclareVectorInputPort("applied_command", nv - 2)
         self._memory = self.DeclareDiscreteState(ObserverState.size(nv))
-        # Started at the first state (p(0)); the first sample ends at t = period.
+        # Started at the first state (p(0)); the first sample ends at t = period. The
+        # periodic event has the controller's offset, 0, so that both compute the same event
+        # times to the bit (offset period gives period + k period, which can differ from
+        # (k + 1) period in the last bit and split an integrator step: the paper law's
+        # command then changed at 1e-14 with the observer on); the update at the start time
+        # keeps the initialized state (_update).
         self.DeclareInitializationDiscreteUpdateEvent(self._initialize)
-        self.DeclarePeriodicDiscreteUpdateEvent(period, period, self._update)
+        self.DeclarePeriodicDiscreteUpdateEvent(period, 0.0, self._update)
         r_part, wrench_part = ObserverState.parts(nv)
+        held = {self.discrete_state_ticket(self._memory)}  # no direct feedthrough
         for name, part in (("external_wrench_estimate", wrench_part),
                            ("generalized_force_estimate", r_part)):
             self.DeclareVectorOutputPort(
                 name, part.stop - part.start,
                 lambda c, out, part=part: out.SetFromVector(
-                    c.get_discrete_state(self._memory).value()[part]),
-                {self.discrete_state_ticket(self._memory)})
+                    c.get_discrete_state(self._memory).value()[part]), held)
+        vehicle, end_effector = _force_parts(wrench_part)
+        self.DeclareVectorOutputPort(
+            "external_force_estimate", 3,
+            lambda c, out: out.SetFromVector(
+                c.get_discrete_state(self._memory).value()[vehicle]
+                + c.get_discrete_state(self._memory).value()[end_effector]), held)
 
     def _held(self, context: Context) -> ObserverState:
         vector = context.get_discrete_state(self._memory).get_value()
@@ -110,6 +141,8 @@ class WrenchObserver(LeafSystem):
 
     def _update(self, context: Context, discrete_state: DiscreteValues) -> None:
         state = self._held(context)
+        if context.get_time() < 0.5 * self.period:
+            return  # the start's sample (runs start at 0): no interval yet, state kept
         step(state, self._sample(context), self._command_port.Eval(context), self.period,
              self._pole)
         discrete_state.set_value(self._memory, state.vector)
@@ -135,14 +168,25 @@ def add_wrench_observer(builder: DiagramBuilder, model: AerialManipulator, bandw
 
 def add_scenario_observer(builder: DiagramBuilder, scenario: Any, model: AerialManipulator,
                           state: OutputPort, applied_command: OutputPort,
-                          ) -> dict[str, OutputPort]:
+                          controller: System | None = None) -> dict[str, OutputPort]:
     """The observer of ``scenario``'s ``observer`` section (a
     :class:`~aerial_drake.simulation.scenarios.Scenario`; not imported here: the simulation
     layer is above this one), at its ``controller_period``: its outputs by name, or none when
-    the section does not enable it (nothing is added)."""
+    the section does not enable it (nothing is added).
+
+    When ``controller`` (a system in ``builder``) has an input port ``vehicle_force_estimate``
+    (paper_plus's), the observer's ``external_force_estimate`` is connected to it: the
+    vehicle's and the end effector's forces, as both move the CoM (9a); paper_plus reads it
+    only with ``controller.plus.vehicle_force_feedforward`` (docs/control.md, "Push
+    rejection"). Both sides hold their values between samples, so this closes no algebraic
+    loop: the controller's sample at t_k reads the estimate the observer's update at t_k-1
+    left (the momentum change over t_k-2 .. t_k-1, filtered)."""
     config = scenario.observer
     if not config.enabled:
         return {}
     observer = add_wrench_observer(builder, model, config.bandwidth, scenario.controller_period,
                                    state, applied_command)
-    return {name: observer.GetOutputPort(name) for name in OBSERVER_OUTPUTS}
+    outputs = {name: observer.GetOutputPort(name) for name in OBSERVER_OUTPUTS}
+    if controller is not None and controller.HasInputPort(FORCE_INPUT):
+        builder.Connect(outputs["external_force_estimate"], controller.GetInputPort(FORCE_INPUT))
+    return outputs

@@ -17,7 +17,9 @@ Ports of the closed loop (the Diagram's exported ports, or :meth:`ClosedLoop.inp
   ``applied_command`` (what reaches the plant, after lag and saturation), ``diagnostics``,
   ``com_reference``, ``task_reference``, ``heading_reference``, ``query_object`` (for
   visualisers), ``rotor_drive_torque`` (rotors variant only), the wrench observer's
-  ``external_wrench_estimate`` and ``generalized_force_estimate`` (``observer.enabled`` only).
+  ``external_wrench_estimate``, ``generalized_force_estimate`` and ``external_force_estimate``
+  (``observer.enabled`` only; the last also feeds the controller's ``vehicle_force_estimate``
+  input if it has one, paper_plus's).
 """
 
 from __future__ import annotations
@@ -290,7 +292,9 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
 
     base_cmd, joint_cmd, applied, lag = _add_command_path(builder, scenario, model, command)
     outputs["applied_command"] = applied
-    outputs.update(add_scenario_observer(builder, scenario, model, measured, applied))
+    # The observer (observer.enabled) feeds paper_plus's vehicle_force_estimate input.
+    outputs.update(add_scenario_observer(builder, scenario, model, measured, applied,
+                                         controller))
 
     # (2): thrust along body z and body torques, at the helicopter frame; joint torques.
     base_forces = connect_actuation(builder, sim, base_cmd, joint_cmd)

@@ -48,12 +48,17 @@ def test_shipped_studies_load():
     # Each shipped study planned once (every planned run is validated: the costly part).
     plans = {name: dut.plan_runs(dut.load_study(name)) for name in dut.shipped_studies()}
     sizes = {name: len(runs) for name, runs in plans.items()}
-    assert sizes == {"robustness": 200, "gains": 25, "gains_attitude": 25, "directions": 200}
+    assert sizes == {"robustness": 200, "gains": 25, "gains_attitude": 25, "directions": 200,
+                     "directions_plus": 200}
     # The control draws the robustness study's directions, without its model error.
     robust, control = plans["robustness"], plans["directions"]
     for a, b in zip(robust, control):
         assert a.values["random_disturbances.seed"] == b.values["random_disturbances.seed"]
         assert b.values["payload.mass"] == 0.0
+    # directions_plus pushes as directions does, draw for draw, with paper_plus.
+    for a, b in zip(control, plans["directions_plus"]):
+        assert a.values == b.values
+        assert dut.scenario_from_text(b.scenario_text).controller.type == "paper_plus"
 
 
 def _write(tmp_path, text):
