@@ -10,7 +10,7 @@ from aerial_drake.control.registry import controller_types
 from aerial_drake.simulation.scenarios.checks import BANDWIDTH, ScenarioError, flag, number
 
 
-def check_controller(s: Any, n: int) -> None:
+def check_controller(s: Any, n: int, mass: float) -> None:
     """The type, and the baselines' and paper_plus's sections (``n``: the task's rows);
     paper_plus's force feed-forward needs the observer (its one source in a run)."""
     controller, period = s.controller, s.controller_period
@@ -29,9 +29,8 @@ def check_controller(s: Any, n: int) -> None:
         # Each section's message starts with the field's dotted name.
         raise ScenarioError(str(err), str(err).split(" ", 1)[0]) from None
     if controller.type == PAPER_PLUS and any(controller.plus.com_gain()):
-        plant = s.controller_model().plant  # the bound needs the mass: built for this case
-        unstable = controller.plus.com_gain_error(
-            plant.CalcTotalMass(plant.CreateDefaultContext()), s.gains.K_x, s.gains.D_x)
+        # The bound needs the robot's total mass (the robot's facts, read once per robot).
+        unstable = controller.plus.com_gain_error(mass, s.gains.K_x, s.gains.D_x)
         if unstable:
             raise ScenarioError(unstable, "controller.plus.com_integral_gain")
     if (controller.type == PAPER_PLUS and controller.plus.vehicle_force_feedforward

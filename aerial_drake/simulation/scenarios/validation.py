@@ -103,7 +103,7 @@ def validate_scenario(s: Any) -> None:
     facts = robot_facts(s)
     check_values(s, facts)
     check_trajectory(s, np.array(facts.joint_nominal))
-    check_controller(s, facts.n)
+    check_controller(s, facts.n, facts.mass)
     check_observer(s.observer, s.controller_period)
     check_perturbations(s, facts)
     check_world(s)
