@@ -19,6 +19,7 @@ thrust follows (docs/control.md, "Table II's attitude root is slower than the Co
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,11 +36,6 @@ _MARGIN = 1.05
 
 class GainDesignWarning(UserWarning):
     """The scenario's gains leave the attitude loop too slow against the CoM loop."""
-
-
-def _roots(inertia: float, stiffness: float, damping: float) -> np.ndarray:
-    # inertia s^2 + damping s + stiffness: the polynomial of both loops (module docstring).
-    return attitude_poles(inertia, stiffness, damping)
 
 
 @dataclass(frozen=True)
@@ -81,8 +77,9 @@ def loop_roots(mass: float, K_x, D_x, k_R: float, k_w: float, attitude_inertia,
     attitude axis (``attitude_inertia``, 3 entries, with ``k_R``, ``k_w``)."""
     K_x, D_x = np.asarray(K_x, float), np.asarray(D_x, float)
     J = np.asarray(attitude_inertia, float)
-    com = np.array([_roots(mass, K_x[i], D_x[i]) for i in range(3)], dtype=complex)
-    attitude = np.array([_roots(J[i], k_R, k_w) for i in range(3)], dtype=complex)
+    # inertia s^2 + damping s + stiffness: the one polynomial of both loops (attitude_poles).
+    com = np.array([attitude_poles(mass, K_x[i], D_x[i]) for i in range(3)], dtype=complex)
+    attitude = np.array([attitude_poles(J[i], k_R, k_w) for i in range(3)], dtype=complex)
     return LoopRoots(mass=float(mass), K_x=K_x, D_x=D_x, k_R=float(k_R), k_w=float(k_w),
                      attitude_inertia=J, com=com, attitude=attitude)
 
@@ -155,7 +152,6 @@ def warn_if_slow(mass: float, gains, attitude_inertia, inertia_source: str,
     """Warn (:class:`GainDesignWarning`, with :func:`gain_design_message`) when ``gains``'
     attitude loop, of ``attitude_inertia``, is too slow against their CoM loop on a robot of
     ``mass``; returns the roots."""
-    import warnings
     roots = loop_roots(mass, gains.K_x, gains.D_x, gains.k_R, gains.k_w, attitude_inertia)
     message = gain_design_message(roots, inertia_source)
     if message is not None:

@@ -10,18 +10,12 @@ the run) or run many times in a study says it once per process.
 
 from __future__ import annotations
 
-import warnings
 from typing import Any
 
 import numpy as np
 
 from aerial_drake.control.baselines.params import BASELINE_TYPES
-from aerial_drake.control.gain_design import (
-    GainDesignWarning,
-    LoopRoots,
-    gain_design_message,
-    loop_roots,
-)
+from aerial_drake.control.gain_design import LoopRoots, warn_if_slow
 from aerial_drake.control.registry import PAPER_CONTROLLER
 
 #: The controller types whose attitude loop is the paper's (16), ``gains.Lambda2_bar`` its
@@ -29,30 +23,16 @@ from aerial_drake.control.registry import PAPER_CONTROLLER
 LAW_16_TYPES = (PAPER_CONTROLLER, "paper_plus")
 
 
-def scenario_loop_roots(s: Any, mass: float) -> tuple[LoopRoots, str] | None:
-    """The loops' roots of scenario ``s`` (validated gains) on a robot of total ``mass`` (kg),
-    and where the attitude inertia comes from; None for a controller type whose attitude
-    loop is not known here."""
-    g, kind = s.gains, s.controller.type
-    if kind in LAW_16_TYPES:
-        inertia, source = np.asarray(g.Lambda2_bar, float), "(gains.Lambda2_bar, by (16))"
-    elif kind in BASELINE_TYPES:
-        found = _baseline_inertia(s)
-        if found is None:
-            return None
-        inertia, source = found
-    else:
-        return None
-    return loop_roots(mass, g.K_x, g.D_x, g.k_R, g.k_w, inertia), source
-
-
-def _baseline_inertia(s: Any) -> tuple[np.ndarray, str] | None:
-    """The principal moments of the inertia the baselines' vehicle law assumes, when given
-    (``controller.baseline.vehicle_inertia``); None for the default, the robot locked at its
-    start, which needs the run's reference: checked where the registry builds the
-    baseline (:mod:`aerial_drake.control.registry`)."""
+def attitude_inertia(s: Any) -> tuple[np.ndarray, str] | None:
+    """The inertia per attitude axis that scenario ``s``'s attitude law assumes, and where it
+    comes from; None where it is not known at load: a controller type whose attitude loop
+    is its own, or a baseline's default inertia, the robot locked at its start, which needs
+    the run's reference (checked where the registry builds the baseline,
+    :mod:`aerial_drake.control.registry`)."""
+    if s.controller.type in LAW_16_TYPES:
+        return np.asarray(s.gains.Lambda2_bar, float), "(gains.Lambda2_bar, by (16))"
     given = s.controller.baseline.vehicle_inertia
-    if given:
+    if s.controller.type in BASELINE_TYPES and given:
         return np.asarray(given, float), "(controller.baseline.vehicle_inertia)"
     return None
 
@@ -60,12 +40,8 @@ def _baseline_inertia(s: Any) -> tuple[np.ndarray, str] | None:
 def warn_gain_design(s: Any, mass: float) -> LoopRoots | None:
     """Warn (:class:`GainDesignWarning`) when scenario ``s``'s attitude loop is too slow
     against its CoM loop on a robot of total ``mass``; returns the roots (None where the
-    controller type is not checked)."""
-    found = scenario_loop_roots(s, mass)
+    inertia is not known at load, :func:`attitude_inertia`)."""
+    found = attitude_inertia(s)
     if found is None:
         return None
-    roots, source = found
-    message = gain_design_message(roots, source)
-    if message is not None:
-        warnings.warn(message, GainDesignWarning, stacklevel=2)
-    return roots
+    return warn_if_slow(mass, s.gains, *found, stacklevel=4)
