@@ -192,14 +192,55 @@ def test_j_transpose_w_is_the_generalized_force_of_the_wrench_at_the_ee_origin(d
 
 
 def _ratios(disturbed, model, window, fraction):
-    """max |tau_g + J^T w| / (fraction tau_max) over the arm's joints and the window's edges."""
+    """max |tau_g + J^T w| / (fraction tau_max) over the arm's joints and the postures every
+    0.01 s along the window (finer than the check's 0.05 s: the bound is met there too, to
+    the posture's motion over 0.025 s)."""
     arm = disturbances.ArmLoads(disturbed, model, None)
     w = np.concatenate([window.torque, window.force])
     out = []
-    for t in (window.start, window.stop):
+    for t in np.linspace(window.start, window.stop, int(round((window.stop - window.start)
+                                                                / 0.01)) + 1):
         g, JT = arm.at(t)
         out.append(np.abs(g + JT @ w) / (fraction * arm.limits))
     return np.max(out)
+
+
+def _max_checked(disturbed, model, window, fraction):
+    """The same ratio at the postures the check uses (disturbances.hold_times)."""
+    arm = disturbances.ArmLoads(disturbed, model, None)
+    w = np.concatenate([window.torque, window.force])
+    return max(np.max(np.abs(g + JT @ w) / (fraction * arm.limits))
+               for g, JT in (arm.at(t) for t in disturbances.hold_times(window)))
+
+
+def test_the_hold_check_covers_the_window_not_only_its_edges(disturbed, model):
+    """The postures are checked every 0.05 s (at most) from start to stop; a window whose
+    worst posture lies between its edges is bounded there: on the disturbed case's agile
+    circle, a wrench turned to load the wrist at mid-window."""
+    assert disturbances.hold_times(R(disturbed.disturbances[1], start=9.0, stop=10.0)) == (
+        pytest.approx(list(np.linspace(9.0, 10.0, 21)), abs=1e-12))
+    assert disturbances.hold_times(R(disturbed.disturbances[1], start=2.0, stop=2.01)) == (
+        pytest.approx([2.0, 2.01], abs=1e-12))
+    arm = disturbances.ArmLoads(disturbed, model, None)
+    # A torque about the flange's axis at mid-window, where joint 7's share is largest
+    # relative to the edges: found over a few directions.
+    best = None
+    for direction in np.eye(3).tolist() + (-np.eye(3)).tolist():
+        window = Disturbance(target="end_effector", start=9.0, stop=10.0, force=[0.0] * 3,
+                             torque=(20.0 * np.array(direction)).tolist())
+        edges = max(np.max(np.abs(g + JT @ np.concatenate([window.torque, window.force]))
+                           / arm.limits) for g, JT in (arm.at(9.0), arm.at(10.0)))
+        inside = _ratios(disturbed, model, window, 1.0)
+        if best is None or inside / edges > best[0]:
+            best = (inside / edges, window)
+    assert best[0] > 1.01  # the worst posture is inside the window
+    window = R(best[1], torque=(4.0 * np.array(best[1].torque)).tolist())  # beyond 0.5
+    assert _ratios(disturbed, model, window, 0.5) > 1.5
+    scenario = R(disturbed, disturbances=[window], random_disturbances=R(
+        disturbed.random_disturbances, arm_hold_fraction=0.5))
+    bounded = disturbances.bound_end_effector_windows(scenario, model).disturbances[0]
+    assert _max_checked(disturbed, model, bounded, 0.5) == pytest.approx(1.0, rel=1e-12)
+    assert _ratios(disturbed, model, bounded, 0.5) < 1.01
 
 
 def test_a_window_beyond_the_arm_is_scaled_to_the_fraction_one_within_is_kept(disturbed,
@@ -222,8 +263,10 @@ def test_a_window_beyond_the_arm_is_scaled_to_the_fraction_one_within_is_kept(di
     assert s < 0.7
     np.testing.assert_allclose(new_big.force, s * np.array(big.force), rtol=1e-15)
     np.testing.assert_allclose(new_big.torque, s * np.array(big.torque), rtol=1e-15)
-    # The worst joint at the worse edge is exactly at the fraction of its limit.
-    assert _ratios(disturbed, model, new_big, fraction) == pytest.approx(1.0, rel=1e-12)
+    # The worst joint at the worst checked posture is exactly at the fraction of its limit;
+    # between the checked postures (0.05 s apart) it is within 1 % of it.
+    assert _max_checked(disturbed, model, new_big, fraction) == pytest.approx(1.0, rel=1e-12)
+    assert _ratios(disturbed, model, new_big, fraction) < 1.01
     # The input is untouched; bounding again changes nothing (the resolved scenario re-runs).
     assert scenario.disturbances[1] == big
     assert disturbances.bound_end_effector_windows(bounded, model) is bounded

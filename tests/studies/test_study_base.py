@@ -8,7 +8,8 @@ from pydrake.common.yaml import yaml_dump_typed
 from aerial_drake.simulation.scenarios import load_scenario
 from aerial_drake.studies.spec import load_study
 
-SHIPPED_STUDIES = ("robustness", "directions", "directions_plus", "gains", "gains_attitude")
+SHIPPED_STUDIES = ("robustness", "directions", "directions_plus", "gains", "gains_attitude",
+                   "robustness_plus")
 
 
 def test_study_base_differs_from_disturbed_only_where_documented():

@@ -140,7 +140,8 @@ def test_help_lists_every_shipped_study_and_show_run_tells_the_studys_own(capsys
     from aerial_drake.cli.parser import build_parser
     from aerial_drake.studies.spec import shipped_studies
     names = list(shipped_studies())
-    assert len(names) == 5  # robustness, directions, directions_plus, gains, gains_attitude
+    # robustness, directions, directions_plus, gains, gains_attitude, robustness_plus
+    assert len(names) == 6
     text = " ".join(build_parser()._subparsers._group_actions[0].choices["study"]
                     .format_help().split())
     assert all(name in text for name in names)

@@ -149,9 +149,10 @@ class RandomDisturbances:
 
     ``arm_hold_fraction`` (0 = off) bounds every window on the end effector (the scenario's
     own, redirected or not, and the new ones) by what the arm can hold: its force and torque
-    scaled down by one factor ``s <= 1`` so that at the reference posture at the window's start
-    and at its end ``|tau_g,i + s (J^T w)_i| <= arm_hold_fraction * tau_max,i`` for every arm
-    joint ``i`` (:func:`aerial_drake.simulation.disturbances.bound_end_effector_windows`).
+    scaled down by one factor ``s <= 1`` so that at the reference postures along the window
+    (its edges and every 0.05 s between) ``|tau_g,i + s (J^T w)_i| <= arm_hold_fraction *
+    tau_max,i`` for every arm joint ``i``
+    (:func:`aerial_drake.simulation.disturbances.bound_end_effector_windows`).
     """
 
     # Turn the scenario's own windows to random directions.
