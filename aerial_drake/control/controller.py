@@ -8,6 +8,8 @@ diagram holding the controller (see :mod:`aerial_drake.analysis`).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from pydrake.autodiffutils import AutoDiffXd, ExtractGradient
 from pydrake.multibody.plant import MultibodyPlant
@@ -93,8 +95,8 @@ class _DecoupledControllerBase:
         self._K = GainMatrices.from_gains(gains, n_task=self._n)
         self._gravity = self._dynamics.gravity
         self._frame = end_effector_frame
-        self._limits = dict(sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit,
-                            singularity=singularity)
+        self._limits: dict[str, Any] = dict(
+            sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit, singularity=singularity)
         # The diagnostics' entry the damped law's check of control reads (evaluate_into).
         self._ee_error_at = diagnostics_slices(self._n)["ee_position_error"].start
         self._plant_context = plant.CreateDefaultContext()

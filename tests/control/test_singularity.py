@@ -14,9 +14,11 @@ from aerial_drake.control.law import (
     NO_DAMPING,
     AssumptionViolation,
     SingularityRobust,
+    control_lost_message,
     diagnostics_slices,
 )
 from aerial_drake.control.plus import PlusParams
+from aerial_drake.simulation.failure_cause import singular_stop
 from aerial_drake.simulation.runner import (
     SimulationFailed,
     reference_configuration,
@@ -149,6 +151,9 @@ def test_control_lost_when_damped_and_the_end_effector_error_beyond_the_bound(se
                            r"damped \(sigma_min\(J_3\) = "):
             law(x, *refs)
     strict.evaluate(_state(q, v, 0.8), *refs)  # not damped: no stop, whatever the error
+    # A failed run's cause reads it as a singular-Jacobian stop (reach, if the arm is
+    # stretched: simulation.failure_cause).
+    assert singular_stop(control_lost_message(0.01, 0.2, 0.1))
 
 
 @pytest.mark.parametrize("field,value,words", [
@@ -194,7 +199,13 @@ def test_a_push_that_stops_the_paper_law_is_passed_damped_or_stops_by_the_criter
     effector 4 mm off); paper_plus with the damping passes through the singular posture
     (the damping logged) and the end effector comes back (measured 22 mm at 3 s, 0.45 mm at
     6 s). For 1.0 s the push holds the CoM out of reach: the damped run then stops on its
-    criterion, naming it (measured at 1.14 s, 0.159 m). About 5 s of wall time."""
+    criterion, naming it (measured at 1.14 s, 0.159 m). About 5 s of wall time.
+
+    The nominal scenario reports joint limits and does not stop at them: on the way the
+    LWR's joint 2 passes its -120 deg limit and the arm ends in another posture (q2 -171 deg,
+    q4 -99 deg, the wrist near its own singularity: damped 0.93 at 6 s). With
+    ``joint_limits.positions: stop`` both laws stop at joint 2's limit at 0.76 s, before the
+    singularity (docs/control.md, "Graceful degradation")."""
     scenario = _push_scenario(0.6)
     with pytest.raises(SimulationFailed, match="Assumption 1 violated") as paper:
         run_scenario(scenario, progress=False)
