@@ -13,6 +13,9 @@ Choices where the paper is silent (also in ``docs/control.md``):
   The task velocity error is velocity-level, ``J xi - y_d_dot`` (17).
 - The feed-forwards take the CoM acceleration and jerk from the model (9a) and the base angular
   acceleration from the closed loop (16), as the paper suggests.
+- Near the singularity of J_3, with :class:`SingularityRobust`'s damping on, J_3^-1 is
+  replaced by a damped least-squares inverse and the Assumption 1 stop by a loss-of-control
+  check (docs/control.md, "Graceful degradation"); off by default (the paper's law).
 - ``V1`` of (25) uses ``k_R / 2 tr(E3 - R_d^T R_b)`` (Lee et al.'s ``k_R Psi``; the paper's
   print drops the 1/2, without which ``dV1/dt`` has an uncancelled ``e_R . w~`` term).
 

@@ -220,3 +220,16 @@ def test_a_push_that_stops_the_paper_law_is_passed_damped_or_stops_by_the_criter
     assert tracking["ee_position_error"][-1, 0] < 0.04  # measured 21.7 mm
     with pytest.raises(SimulationFailed, match="control lost near the singularity of J_3"):
         run_scenario(_damped(_push_scenario(1.0)), progress=False)
+
+
+def test_the_damped_law_converts_to_autodiff(setup):
+    """Scalar conversion keeps the option: the AutoDiffXd law (for Linearize) gives the
+    double law's damped torques near the singular posture (lambda^2 a constant of the
+    state there, from sigma_min's value)."""
+    from pydrake.autodiffutils import AutoDiffXd
+    q, v, refs, _, damped, _ = setup
+    x = _state(q, v, 0.01)
+    autodiff = damped.ToAutoDiffXd()
+    ad = [np.array([AutoDiffXd(float(a)) for a in array], dtype=object) for array in (x, *refs)]
+    tau = np.array([t.value() for t in autodiff.solve(*ad).tau])
+    assert rel(tau, damped.solve(x, *refs).tau) < 1e-12

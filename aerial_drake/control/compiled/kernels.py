@@ -9,7 +9,7 @@ to its diagnostics to the bit (and in this file for the same cache reason as bel
 recompile whenever Section II or the law's kinematics change);
 :mod:`aerial_drake.control.compiled.law` holds the Python entry points.
 
-Why this module is longer than the others (some 770 lines): Section II and the law are one
+Why this module is longer than the others (some 1000 lines): Section II and the law are one
 compile unit. The law's workspace nests Section II's (:func:`_law_buffers` lays out
 :func:`_section2_buffers` first, and :func:`_workspace_size` sizes both), :func:`_section2` is
 inlined into both :func:`_decompose` and :func:`_law`, and the law reads Section II's buffers
