@@ -55,6 +55,8 @@ OBSERVER_OUTPUTS = ("external_wrench_estimate", "generalized_force_estimate",
                     "external_force_estimate")
 #: The controller input port the observer's external force feeds (paper_plus's).
 FORCE_INPUT = "vehicle_force_estimate"
+#: The controller input port the observer's generalized force feeds (paper_plus's).
+GENERALIZED_FORCE_INPUT = "generalized_force_estimate"
 
 
 def _force_parts(wrench_part: slice) -> tuple[slice, slice]:
@@ -178,9 +180,11 @@ def add_scenario_observer(builder: DiagramBuilder, scenario: Any, model: AerialM
     (paper_plus's), the observer's ``external_force_estimate`` is connected to it: the
     vehicle's and the end effector's forces, as both move the CoM (9a); paper_plus reads it
     only with ``controller.plus.vehicle_force_feedforward`` (docs/control.md, "Push
-    rejection"). Both sides hold their values between samples, so this closes no algebraic
-    loop: the controller's sample at t_k reads the estimate the observer's update at t_k-1
-    left (the momentum change over t_k-2 .. t_k-1, filtered)."""
+    rejection"); likewise ``generalized_force_estimate`` to the input of that name, read with
+    ``controller.plus.wrench_compensation`` ("Wrench compensation"). Both sides hold their
+    values between samples, so this closes no algebraic loop: the controller's sample at t_k
+    reads the estimate the observer's update at t_k-1 left (the momentum change over t_k-2 ..
+    t_k-1, filtered)."""
     config = scenario.observer
     if not config.enabled:
         return {}
@@ -189,4 +193,7 @@ def add_scenario_observer(builder: DiagramBuilder, scenario: Any, model: AerialM
     outputs = {name: observer.GetOutputPort(name) for name in OBSERVER_OUTPUTS}
     if controller is not None and controller.HasInputPort(FORCE_INPUT):
         builder.Connect(outputs["external_force_estimate"], controller.GetInputPort(FORCE_INPUT))
+    if controller is not None and controller.HasInputPort(GENERALIZED_FORCE_INPUT):
+        builder.Connect(outputs["generalized_force_estimate"],
+                        controller.GetInputPort(GENERALIZED_FORCE_INPUT))
     return outputs

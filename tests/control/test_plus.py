@@ -132,6 +132,36 @@ def test_J1_is_a_translation_of_the_whole_robot_on_the_position_rows():
     np.testing.assert_allclose(J1, want, atol=1e-12)
 
 
+def test_the_wrench_compensation_is_minus_T_transpose_of_the_estimates_decoupled_share():
+    """compensation() against its definition on Section II's matrices: the generalized force
+    T^T [0; -(T^-T tau^)_2; -(T^-T tau^)_3] (no thrust: its force rows vanish), mapped to the
+    vehicle moment (body axes) and the arm torques, at a random posture and attitude."""
+    from pydrake.multibody.tree import JacobianWrtVariable
+
+    from aerial_drake.control.plus.compensation import compensation
+    model = make_plant("rigid")
+    plant, ctx = model.plant, model.plant.CreateDefaultContext()
+    rng = np.random.default_rng(11)
+    q = plant.GetPositions(ctx)
+    q[:4] = rng.normal(size=4)
+    q[:4] /= np.linalg.norm(q[:4])
+    q[7:] += rng.uniform(-0.5, 0.5, q.size - 7)
+    plant.SetPositions(ctx, q)
+    d = DecoupledDynamics(plant).compute(ctx)
+    tau_hat = rng.normal(size=plant.num_velocities()) * 10.0
+    share = d.T_inv.T @ tau_hat
+    np.testing.assert_allclose(share[:3], tau_hat[3:6], atol=1e-9)  # the total force
+    want = d.T.T @ np.concatenate([np.zeros(3), -share[3:]])
+    np.testing.assert_allclose(want[3:6], 0.0, atol=1e-9)
+    world = plant.world_frame()
+    J_g = plant.CalcJacobianCenterOfMassTranslationalVelocity(
+        ctx, JacobianWrtVariable.kV, world, world)
+    R_WB = plant.EvalBodyPoseInWorld(ctx, model.base_body).rotation().matrix()
+    mu_c, tau_c = compensation(tau_hat, J_g, R_WB)
+    np.testing.assert_allclose(R_WB @ mu_c, want[:3], atol=1e-9)
+    np.testing.assert_allclose(tau_c, want[6:], atol=1e-9)
+
+
 # --- Options and their errors ----------------------------------------------------------------
 
 @pytest.mark.parametrize("field,value,words", [
@@ -140,6 +170,7 @@ def test_J1_is_a_translation_of_the_whole_robot_on_the_position_rows():
     ("task_integral_gain", [-1.0] * 7, "[0, 1e6]"),
     ("com_integral_limit", 0.0, "> 0"),
     ("vehicle_force_feedforward", 1, "true or false"),
+    ("wrench_compensation", "yes", "true or false"),
 ])
 def test_bad_options_are_refused_naming_the_field(field, value, words):
     scenario = _plus(_hover(1.0), **{field: value})

@@ -10,6 +10,7 @@ off, the command is the paper law's to the bit.
 from __future__ import annotations
 
 import numpy as np
+from pydrake.multibody.tree import JacobianWrtVariable
 from pydrake.systems.framework import Context
 
 from aerial_drake.control.base import ControllerBase, at_time
@@ -22,6 +23,7 @@ from aerial_drake.control.law import (
     diagnostics_layout,
     diagnostics_slices,
 )
+from aerial_drake.control.plus.compensation import compensation
 from aerial_drake.control.plus.params import PAPER_PLUS, PlusParams
 from aerial_drake.control.plus.shaping import com_shift, shaped_references, task_shift
 from aerial_drake.robots.models import AerialManipulator
@@ -33,12 +35,14 @@ _INTEGRATOR = 2
 def plus_diagnostics_layout(n: int) -> tuple[tuple[str, int], ...]:
     """The paper law's diagnostics (:func:`aerial_drake.control.law.diagnostics_layout`),
     then paper_plus's: the integral terms added to f_d (N) and to z_d, the force fed forward
-    (N) and whether integration was held at the sample (1) or not (0); the damping of J_3's
-    inverse, lambda^2 / lambda_max^2 (0: exact inverse, 1: full damping;
+    (N), whether integration was held at the sample (1) or not (0), the wrench
+    compensation added to the vehicle moment (N m, body axes) and the arm torques, and the
+    damping of J_3's inverse, lambda^2 / lambda_max^2 (0: exact inverse, 1: full damping;
     :meth:`~aerial_drake.control.law.SingularityRobust.damping_ratio`)."""
     return diagnostics_layout(n) + (
         ("com_integral_force", 3), ("task_integral_velocity", n),
-        ("vehicle_force_feedforward", 3), ("integration_held", 1)) + (
+        ("vehicle_force_feedforward", 3), ("integration_held", 1),
+        ("compensation_moment", 3), ("compensation_torque", n)) + (
         ("singularity_damping", 1),)
 
 
@@ -49,7 +53,10 @@ class PaperPlusController(ControllerBase):
     Ports: the base's (:class:`~aerial_drake.control.base.ControllerBase`), and the optional
     input ``vehicle_force_estimate`` (3, N, World): an estimate of the external force on the
     vehicle, fed forward into f_d when ``params.vehicle_force_feedforward``; unconnected, it
-    reads as zero (e.g. an observer's output can be wired to it).
+    reads as zero (e.g. an observer's output can be wired to it); and the optional input
+    ``generalized_force_estimate`` (nv, Drake's velocities): an estimate of the external
+    generalized force, compensated when ``params.wrench_compensation``
+    (:mod:`aerial_drake.control.plus.compensation`); unconnected, zero.
 
     The integrator state (discrete group 2, 9 + 2 n entries): the integrals s_x (3, m s) and
     s_y (n) of x~ and y~, and the rates the next sample's feed-forward uses, s_x' (3), s_x''
@@ -87,6 +94,14 @@ class PaperPlusController(ControllerBase):
             sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit, period=period,
             singularity=params.singularity())
         self._force_port = self.DeclareVectorInputPort("vehicle_force_estimate", 3)
+        plant = model.plant
+        self._tau_port = self.DeclareVectorInputPort("generalized_force_estimate",
+                                                     plant.num_velocities())
+        # The plant's own context for the CoM Jacobian and the attitude the compensation
+        # needs (the robot's instances only: an environment's welded bodies have no J_g).
+        self._plant, self._plant_context = plant, plant.CreateDefaultContext()
+        self._instances = list(model.model_instances)
+        self._base = model.base_body
         self.DeclareDiscreteState(9 + 2 * n)  # group _INTEGRATOR (module constants)
         self._n, self._rows, self._h = n, task.rows, float(period)
         self._params = params
@@ -108,8 +123,9 @@ class PaperPlusController(ControllerBase):
         self._lower, self._upper = (np.asarray(a, float) for a in limits)
         self._slices = diagnostics_slices(list(self.diagnostics_layout))
         self._paper_size = sum(size for _, size in diagnostics_layout(n))
-        # The integrator state and force after the latest sample (for evaluate).
-        self._latest = (np.zeros(9 + 2 * n), np.zeros(3))
+        # The integrator state, force and generalized force after the latest sample (for
+        # evaluate).
+        self._latest = (np.zeros(9 + 2 * n), np.zeros(3), np.zeros(plant.num_velocities()))
 
     @property
     def params(self) -> PlusParams:
@@ -118,12 +134,16 @@ class PaperPlusController(ControllerBase):
     def get_vehicle_force_estimate_input_port(self):
         return self._force_port
 
+    def get_generalized_force_estimate_input_port(self):
+        return self._tau_port
+
     # --- The law on shaped references ---------------------------------------------------
     def _run(self, t: float, x: np.ndarray, com: np.ndarray, task: np.ndarray,
-             heading: np.ndarray, state: np.ndarray, force: np.ndarray, command: np.ndarray,
-             diagnostics: np.ndarray) -> None:
-        """The law at the integrator ``state`` and fed-forward ``force``, into ``command``
-        and ``diagnostics`` (the paper's entries, then the integral terms and the force)."""
+             heading: np.ndarray, state: np.ndarray, force: np.ndarray, tau_hat: np.ndarray,
+             command: np.ndarray, diagnostics: np.ndarray) -> None:
+        """The law at the integrator ``state``, fed-forward ``force`` and compensated
+        ``tau_hat``, into ``command`` and ``diagnostics`` (the paper's entries, then the
+        integral terms, the force and the compensation)."""
         n = self._n
         s_x, s_y = state[0:3], state[3:3 + n]
         rate_x, rate_x_dot, rate_y = state[3 + n:6 + n], state[6 + n:9 + n], state[9 + n:]
@@ -135,7 +155,11 @@ class PaperPlusController(ControllerBase):
         # at hover, 50 N along y gives 0.10 m/s^2, F^ / m 0.91). Measured: with J_1 F^ / m
         # the end effector errs 12.1 mm under a 50 N push fed forward, without it 0.92 mm
         # (docs/control.md, "Push rejection").
-        e1, e2 = task_shift(self._K_y, self._k_y, s_y, rate_y, self._rows, np.zeros(3))
+        # With the wrench compensated the model's x_g'' in (20) gets the estimated force too
+        # (observer-corrected accelerations throughout; docs/control.md, "Wrench
+        # compensation"); alone, that term made matters worse (the comment above).
+        accel = tau_hat[3:6] / self._m if self._params.wrench_compensation else np.zeros(3)
+        e1, e2 = task_shift(self._K_y, self._k_y, s_y, rate_y, self._rows, accel)
         com, task = shaped_references(com, task, d_com, e1, e2, self._rows)
         self._law.evaluate_into(t, x, com, task, heading, command,
                                 diagnostics[:self._paper_size])
@@ -143,6 +167,15 @@ class PaperPlusController(ControllerBase):
         diagnostics[d["com_integral_force"]] = -self._k_x * s_x
         diagnostics[d["task_integral_velocity"]] = -self._k_y * s_y
         diagnostics[d["vehicle_force_feedforward"]] = force
+        if self._params.wrench_compensation:
+            mu_c, tau_c = self._compensation(x, tau_hat)
+            command[1:4] += mu_c
+            command[4:] += tau_c
+            diagnostics[d["compensation_moment"]] = mu_c
+            diagnostics[d["compensation_torque"]] = tau_c
+        else:
+            diagnostics[d["compensation_moment"]] = 0.0
+            diagnostics[d["compensation_torque"]] = 0.0
         saturated = np.any(command < self._lower) or np.any(command > self._upper)
         diagnostics[d["integration_held"]] = float(saturated)
         diagnostics[d["singularity_damping"]] = self._singularity.damping_ratio(
@@ -155,8 +188,7 @@ class PaperPlusController(ControllerBase):
         by the latest sample this controller ran (zero before any), as the update after
         the last logged sample computes them (the run's log takes its last row so,
         :mod:`aerial_drake.simulation.run_log`). A run's samples read the held state."""
-        self._run(t, x, com, task, heading, self._latest[0], self._latest[1], command,
-                  diagnostics)
+        self._run(t, x, com, task, heading, *self._latest, command, diagnostics)
 
     def _advance(self, state: np.ndarray, diagnostics: np.ndarray) -> np.ndarray:
         """The integrator state after this sample (class docstring)."""
@@ -186,22 +218,39 @@ class PaperPlusController(ControllerBase):
 
     def _step(self, context: Context, discrete_state, *, advance: bool) -> None:
         x, com, task, heading = self._inputs(context)
-        force = np.zeros(3)
+        force, tau_hat = np.zeros(3), np.zeros(self._tau_port.size())
         if self._params.vehicle_force_feedforward and self._force_port.HasValue(context):
             force = np.array(self._force_port.Eval(context), dtype=float)
+        if self._params.wrench_compensation and self._tau_port.HasValue(context):
+            tau_hat = np.array(self._tau_port.Eval(context), dtype=float)
         state = np.array(context.get_discrete_state(_INTEGRATOR).value())
         command = discrete_state.get_mutable_value(0)
         diagnostics = discrete_state.get_mutable_value(1)
         self.evaluations += 1
         try:
-            self._run(context.get_time(), x, com, task, heading, state, force, command,
-                      diagnostics)
+            self._run(context.get_time(), x, com, task, heading, state, force, tau_hat,
+                      command, diagnostics)
         except (AssumptionViolation, FloatingPointError) as err:
             raise at_time(err, context) from None
         if advance:
             new = self._advance(state, diagnostics)
             discrete_state.get_mutable_value(_INTEGRATOR)[:] = new
-            self._latest = (new, force)
+            self._latest = (new, force, tau_hat)
+
+    def _compensation(self, x: np.ndarray, tau_hat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(mu_c, tau_c) at state ``x`` (:func:`~aerial_drake.control.plus.compensation.
+        compensation`, with the plant's CoM Jacobian and attitude there)."""
+        plant, context = self._plant, self._plant_context
+        plant.SetPositions(context, x[:plant.num_positions()])
+        world = plant.world_frame()
+        if self._instances:
+            J_g = plant.CalcJacobianCenterOfMassTranslationalVelocity(
+                context, self._instances, JacobianWrtVariable.kV, world, world)
+        else:
+            J_g = plant.CalcJacobianCenterOfMassTranslationalVelocity(
+                context, JacobianWrtVariable.kV, world, world)
+        R_WB = plant.EvalBodyPoseInWorld(context, self._base).rotation().matrix()
+        return compensation(tau_hat, J_g, R_WB)
 
 
 def make_paper_plus(scenario, model: AerialManipulator,

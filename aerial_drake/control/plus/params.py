@@ -39,6 +39,12 @@ class PlusParams:
     # Feed the input port ``vehicle_force_estimate`` (an estimate of the external force on
     # the vehicle, World, N; unconnected = zero) forward into f_d of (10).
     vehicle_force_feedforward: bool = False
+    # Cancel the observer's estimate of the external generalized force (input port
+    # ``generalized_force_estimate``) but for its total force (vehicle_force_feedforward's):
+    # the moment about the CoM through the vehicle moment, the rest through the arm torques,
+    # i.e. (16) and (20) with observer-corrected accelerations (docs/control.md, "Wrench
+    # compensation").
+    wrench_compensation: bool = False
 
     # --- Graceful degradation near the singularity of J_3 (docs/control.md, "Graceful
     # degradation"; control.law.SingularityRobust) ---
@@ -108,8 +114,9 @@ class PlusParams:
             if not _is_number(value) or not (math.isfinite(value) and value > 0):
                 raise ValueError(f"{prefix}.{name} must be a finite number > 0; got "
                                  f"{value!r}")
-        if not isinstance(self.vehicle_force_feedforward, bool):
-            raise ValueError(f"{prefix}.vehicle_force_feedforward must be true or false; got "
-                             f"{self.vehicle_force_feedforward!r}")
+        for name in ("vehicle_force_feedforward", "wrench_compensation"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{prefix}.{name} must be true or false; got "
+                                 f"{getattr(self, name)!r}")
         self._validate_singularity(prefix)
         return self

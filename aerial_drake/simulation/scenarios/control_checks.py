@@ -12,7 +12,8 @@ from aerial_drake.simulation.scenarios.checks import BANDWIDTH, ScenarioError, f
 
 def check_controller(s: Any, n: int, mass: float) -> None:
     """The type, and the baselines' and paper_plus's sections (``n``: the task's rows);
-    paper_plus's force feed-forward needs the observer (its one source in a run)."""
+    paper_plus's force feed-forward and wrench compensation need the observer (their one
+    source in a run)."""
     controller, period = s.controller, s.controller_period
     types = controller_types()
     if controller.type not in types:
@@ -33,14 +34,16 @@ def check_controller(s: Any, n: int, mass: float) -> None:
         unstable = controller.plus.com_gain_error(mass, s.gains.K_x, s.gains.D_x)
         if unstable:
             raise ScenarioError(unstable, "controller.plus.com_integral_gain")
-    if (controller.type == PAPER_PLUS and controller.plus.vehicle_force_feedforward
-            and not s.observer.enabled):
-        # In a run only the observer feeds the port; unfed, it would read zero, silently.
-        raise ScenarioError(
-            "controller.plus.vehicle_force_feedforward: true needs an estimate of the force on "
-            "the vehicle, which the wrench observer provides, but observer.enabled is false: "
-            "set observer.enabled: true (its vehicle_force_estimate is then fed forward), or "
-            "vehicle_force_feedforward: false", "controller.plus.vehicle_force_feedforward")
+    # In a run only the observer feeds these options' ports; unfed, they would read zero,
+    # silently.
+    for name, what in (("vehicle_force_feedforward", "the force on the vehicle"),
+                       ("wrench_compensation", "the external generalized force")):
+        if (controller.type == PAPER_PLUS and getattr(controller.plus, name)
+                and not s.observer.enabled):
+            raise ScenarioError(
+                f"controller.plus.{name}: true needs an estimate of {what}, which the wrench "
+                "observer provides, but observer.enabled is false: set observer.enabled: true, "
+                f"or {name}: false", f"controller.plus.{name}")
 
 
 def check_observer(observer: Any, period: float) -> None:
