@@ -333,22 +333,23 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
     z_d_dot = (ref.y_d_ddot - J1 @ xg_dd - J1_dot @ xg_dot - J2 @ w_b_dot - J2_dot @ w_b
                - K.K_y * y_t_dot)  # (20)
     Lambda33, Gamma33 = d.Lambda[6:, 6:], d.Gamma[6:, 6:]
-    if lambda2 > 0.0:
-        # Damped: J3^# = (J3^T J3 + lambda^2 E)^-1 J3^T in place of J3^-1 in (19), and in
-        # u3 the product J3^T J3^-T (the identity) kept as the identity:
-        #   u3 = Lambda33 rho_d' + Gamma33 rho_d - J3^T K_z z~,
-        #   rho_d = J3^# z_d, rho_d' = J3^# (z_d' - J3_dot rho_d),
-        # the law's u3 with J3^-1 (J3^T Lambda_z = Lambda33 J3^-1, ...), bounded by
-        # |J3^#| <= 1 / (2 lambda).
+    if lambda2 > 0.0:  # damped: J3^# = (J3^T J3 + lambda^2 E)^-1 J3^T in place of J3^-1
         J3_inv = inv(J3.T @ J3 + lambda2 * np.eye(J3.shape[1])) @ J3.T
-        rho_d = J3_inv @ z_d
-        rho_d_dot = J3_inv @ (z_d_dot - J3_dot @ rho_d)
-        u3 = Lambda33 @ rho_d_dot + Gamma33 @ rho_d - J3.T @ (K.K_z * z_t)
     else:
         J3_inv = inv(J3)
     Lambda_z = J3_inv.T @ Lambda33 @ J3_inv  # (19)
     Gamma_z = J3_inv.T @ (Gamma33 - Lambda33 @ J3_inv @ J3_dot) @ J3_inv
-    if not lambda2 > 0.0:
+    if lambda2 > 0.0:
+        # The undamped u3 below is J3^T J3^-T (Lambda33 rho_d' + Gamma33 rho_d) - J3^T K_z z~
+        # (J3^T Lambda_z = Lambda33 J3^-1, ...); damped, the product J3^T J3^-T (the
+        # identity) is kept as the identity:
+        #   u3 = Lambda33 rho_d' + Gamma33 rho_d - J3^T K_z z~,
+        #   rho_d = J3^# z_d, rho_d' = J3^# (z_d' - J3_dot rho_d),
+        # bounded by |J3^#| <= 1 / (2 lambda).
+        rho_d = J3_inv @ z_d
+        rho_d_dot = J3_inv @ (z_d_dot - J3_dot @ rho_d)
+        u3 = Lambda33 @ rho_d_dot + Gamma33 @ rho_d - J3.T @ (K.K_z * z_t)
+    else:
         u3 = J3.T @ (Lambda_z @ z_d_dot + Gamma_z @ z_d - K.K_z * z_t)
 
     # Input mapping (8), (22): F = T^T u' is the generalized force J_b^T B psi + Q^T tau.
