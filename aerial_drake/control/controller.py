@@ -8,6 +8,8 @@ diagram holding the controller (see :mod:`aerial_drake.analysis`).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from pydrake.autodiffutils import AutoDiffXd, ExtractGradient
 from pydrake.multibody.plant import MultibodyPlant
@@ -24,17 +26,20 @@ from aerial_drake.control.compiled import (
 )
 from aerial_drake.control.law import (
     F_D_LIMIT,
+    NO_DAMPING,
     SIGMA_MIN_J3_LIMIT,
     AssumptionViolation,
     ControlOutput,
     GainMatrices,
     Gains,
     Reference,
+    SingularityRobust,
     TaskKinematics,
     assumption_1_message,
     assumption_2_message,
     compute_control,
     diagnostics_layout,
+    diagnostics_slices,
 )
 from aerial_drake.dynamics.decoupling import DecoupledDynamics, value_of
 from aerial_drake.dynamics.kinematic_tree import KinematicTree, UnsupportedTree
@@ -69,12 +74,14 @@ class _DecoupledControllerBase:
         gains: Table II gains; validated here (a ValueError names a bad field).
         sigma_min_J3_limit, f_d_limit: thresholds of the Assumption 1 and 2 checks.
         period: the sampling period (s); 0 for continuous feedback.
+        singularity: the damped inverse near the singularity of J_3 and when control is
+            lost (:class:`aerial_drake.control.law.SingularityRobust`); the default is off.
     """
 
     def _setup(self, plant: MultibodyPlant, end_effector_frame: Frame, task: TaskLayout,
                gains: Gains, *,
                sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT, f_d_limit: float = F_D_LIMIT,
-               period: float = 0.0):
+               period: float = 0.0, singularity: SingularityRobust = NO_DAMPING):
         nv = plant.num_velocities()
         self._n = nv - 6
         if task.n != self._n:
@@ -88,7 +95,10 @@ class _DecoupledControllerBase:
         self._K = GainMatrices.from_gains(gains, n_task=self._n)
         self._gravity = self._dynamics.gravity
         self._frame = end_effector_frame
-        self._limits = dict(sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit)
+        self._limits: dict[str, Any] = dict(
+            sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit, singularity=singularity)
+        # The diagnostics' entry the damped law's check of control reads (evaluate_into).
+        self._ee_error_at = diagnostics_slices(self._n)["ee_position_error"].start
         self._plant_context = plant.CreateDefaultContext()
         self.not_compiled_reason = ""
         self._compiled = self._make_compiled(gains) if self._dtype is float else None
@@ -141,6 +151,9 @@ class _DecoupledControllerBase:
         if status == ASSUMPTION_1:
             raise AssumptionViolation(
                 assumption_1_message(sigma_min, self._limits["sigma_min_J3_limit"]))
+        singularity = self._limits["singularity"]
+        if singularity.damping > 0.0:  # the Assumption 1 stop's replacement
+            singularity.check_control_kept(sigma_min, float(diagnostics[self._ee_error_at]))
 
     def _solve_checked(self, x: np.ndarray, com: np.ndarray, task: np.ndarray,
                        heading: np.ndarray) -> ControlOutput:
@@ -209,13 +222,14 @@ def DecoupledController_(T):
 
         def _construct(self, plant, end_effector_frame, task, gains, *,
                        sigma_min_J3_limit=SIGMA_MIN_J3_LIMIT, f_d_limit=F_D_LIMIT,
-                       period=0.0, converter=None):
+                       period=0.0, singularity=NO_DAMPING, converter=None):
             ControllerBase_[T].__init__(
                 self, plant, task, period=period,
                 diagnostics_layout=diagnostics_layout(plant.num_velocities() - 6),
                 converter=converter)
             self._setup(plant, end_effector_frame, task, gains,
-                        sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit)
+                        sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit,
+                        singularity=singularity)
 
         def _construct_copy(self, other, converter=None):
             plant = other._plant.ToScalarType[T]()

@@ -13,6 +13,9 @@ Choices where the paper is silent (also in ``docs/control.md``):
   The task velocity error is velocity-level, ``J xi - y_d_dot`` (17).
 - The feed-forwards take the CoM acceleration and jerk from the model (9a) and the base angular
   acceleration from the closed loop (16), as the paper suggests.
+- Near the singularity of J_3, with :class:`SingularityRobust`'s damping on, J_3^-1 is
+  replaced by a damped least-squares inverse and the Assumption 1 stop by a loss-of-control
+  check (docs/control.md, "Graceful degradation"); off by default (the paper's law).
 - ``V1`` of (25) uses ``k_R / 2 tr(E3 - R_d^T R_b)`` (Lee et al.'s ``k_R Psi``; the paper's
   print drops the 1/2, without which ``dV1/dt`` has an uncancelled ``e_R . w~`` term).
 
@@ -49,6 +52,54 @@ class AssumptionViolation(RuntimeError):
 def assumption_1_message(sigma_min: float, limit: float) -> str:
     return (f"Assumption 1 violated: J_3 is singular, sigma_min(J_3) = {sigma_min:.3g} "
             f"(limit {limit:g})")
+
+
+def control_lost_message(sigma_min: float, ee_error: float, bound: float) -> str:
+    return (f"control lost near the singularity of J_3: the end-effector position error "
+            f"{ee_error:.3g} m exceeds singularity_lost_error = {bound:g} m while the task "
+            f"inverse is damped (sigma_min(J_3) = {sigma_min:.3g})")
+
+
+@dataclass(frozen=True)
+class SingularityRobust:
+    """The singularity-robust inverse of J_3 in (19)-(20) and when control counts as lost
+    (docs/control.md, "Graceful degradation"). ``damping`` 0 (the default): off, the paper's
+    law with its Assumption 1 stop.
+
+    With ``damping`` = lambda_max > 0, below ``threshold`` = eps the law uses the damped
+    least-squares inverse J_3^# = (J_3^T J_3 + lambda^2 E)^-1 J_3^T with Nakamura and
+    Hanafusa's / Chiaverini's variable damping lambda^2 = lambda_max^2 (1 - (sigma_min /
+    eps)^2) (:func:`damping_squared`); the Assumption 1 stop is replaced by: control is lost
+    when the inverse is damped and the end effector's position error exceeds ``lost_error``
+    (m)."""
+
+    damping: float = 0.0
+    threshold: float = 0.05
+    lost_error: float = 0.1
+
+    def damping_ratio(self, sigma_min: float) -> float:
+        """lambda^2 / lambda_max^2 at ``sigma_min`` = sigma_min(J_3): 1 - (sigma_min / eps)^2
+        below eps with the damping on, else 0 (0: the exact inverse, 1: full damping)."""
+        if not (self.damping > 0.0 and sigma_min < self.threshold):
+            return 0.0
+        r = sigma_min / self.threshold
+        return 1.0 - r * r
+
+    def damping_squared(self, sigma_min: float) -> float:
+        """lambda^2 = lambda_max^2 (1 - (sigma_min / eps)^2) below eps, else 0 (the kernel's
+        ``_damping_squared``, the same expression)."""
+        return self.damping * self.damping * self.damping_ratio(sigma_min)
+
+    def check_control_kept(self, sigma_min: float, ee_error: float) -> None:
+        """Raise AssumptionViolation if control is lost: the inverse damped at ``sigma_min``
+        and the end-effector position error ``ee_error`` (m) beyond ``lost_error``."""
+        if self.damping_squared(sigma_min) > 0.0 and ee_error > self.lost_error:
+            raise AssumptionViolation(control_lost_message(sigma_min, ee_error,
+                                                           self.lost_error))
+
+
+#: The paper's law: no damping.
+NO_DAMPING = SingularityRobust()
 
 
 def assumption_2_message(f_d_norm: float, limit: float) -> str:
@@ -212,12 +263,15 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
                     gravity: float, *,
                     sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT,
                     f_d_limit: float = F_D_LIMIT,
+                    singularity: SingularityRobust = NO_DAMPING,
                     ) -> ControlOutput:
-    """The whole law (10)-(22) at one state.
+    """The whole law (10)-(22) at one state; near the singularity of J_3 with the damped
+    inverse of ``singularity`` when its damping is on.
 
     Raises:
-        AssumptionViolation: when sigma_min(J_3) < ``sigma_min_J3_limit`` (Assumption 1) or
-            |f_d| < ``f_d_limit`` N (Assumption 2).
+        AssumptionViolation: when sigma_min(J_3) < ``sigma_min_J3_limit`` (Assumption 1; not
+            checked with damping on), when the damped law has lost control
+            (:class:`SingularityRobust`) or when |f_d| < ``f_d_limit`` N (Assumption 2).
     """
     m, R = d.m, d.R
     xi = d.xi
@@ -267,8 +321,9 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
     # sigma_min from the smallest eigenvalue of J3^T J3 (a symmetric n x n: cheaper than an SVD;
     # accurate to ~1e-16 sigma_max^2 / sigma_min, far below the check's threshold).
     sigma_min = float(np.sqrt(max(np.linalg.eigvalsh(J3_value.T @ J3_value)[0], 0.0)))
-    if not sigma_min > sigma_min_J3_limit:
+    if singularity.damping == 0.0 and not sigma_min > sigma_min_J3_limit:
         raise AssumptionViolation(assumption_1_message(sigma_min, sigma_min_J3_limit))
+    lambda2 = singularity.damping_squared(sigma_min)
     y_t, R_err = task_error(task.p_WE, task.R_WE, task.q_j, ref.p_ed, ref.R_ed, ref.q_jd,
                             task.rows)
     y_t_dot = J @ xi - ref.y_d_dot  # (17)
@@ -277,11 +332,25 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
     z_t = z - z_d  # (18)
     z_d_dot = (ref.y_d_ddot - J1 @ xg_dd - J1_dot @ xg_dot - J2 @ w_b_dot - J2_dot @ w_b
                - K.K_y * y_t_dot)  # (20)
-    J3_inv = inv(J3)
     Lambda33, Gamma33 = d.Lambda[6:, 6:], d.Gamma[6:, 6:]
+    if lambda2 > 0.0:  # damped: J3^# = (J3^T J3 + lambda^2 E)^-1 J3^T in place of J3^-1
+        J3_inv = inv(J3.T @ J3 + lambda2 * np.eye(J3.shape[1])) @ J3.T
+    else:
+        J3_inv = inv(J3)
     Lambda_z = J3_inv.T @ Lambda33 @ J3_inv  # (19)
     Gamma_z = J3_inv.T @ (Gamma33 - Lambda33 @ J3_inv @ J3_dot) @ J3_inv
-    u3 = J3.T @ (Lambda_z @ z_d_dot + Gamma_z @ z_d - K.K_z * z_t)
+    if lambda2 > 0.0:
+        # The undamped u3 below is J3^T J3^-T (Lambda33 rho_d' + Gamma33 rho_d) - J3^T K_z z~
+        # (J3^T Lambda_z = Lambda33 J3^-1, ...); damped, the product J3^T J3^-T (the
+        # identity) is kept as the identity:
+        #   u3 = Lambda33 rho_d' + Gamma33 rho_d - J3^T K_z z~,
+        #   rho_d = J3^# z_d, rho_d' = J3^# (z_d' - J3_dot rho_d),
+        # bounded by |J3^#| <= 1 / (2 lambda).
+        rho_d = J3_inv @ z_d
+        rho_d_dot = J3_inv @ (z_d_dot - J3_dot @ rho_d)
+        u3 = Lambda33 @ rho_d_dot + Gamma33 @ rho_d - J3.T @ (K.K_z * z_t)
+    else:
+        u3 = J3.T @ (Lambda_z @ z_d_dot + Gamma_z @ z_d - K.K_z * z_t)
 
     # Input mapping (8), (22): F = T^T u' is the generalized force J_b^T B psi + Q^T tau.
     u_prime = np.concatenate([u1 * Re3, Gamma23 @ rho + u2, -Gamma23.T @ w_b + u3])  # (8)
@@ -295,12 +364,13 @@ def compute_control(d: Decomposition, task: TaskKinematics, ref: Reference, K: "
     V1 = (0.5 * m * x_t_dot @ x_t_dot + 0.5 * x_t @ (K.K_x * x_t)
           + K.gamma1 * x_t @ x_t_dot + 0.5 * w_t @ (K.Lambda2_bar * w_t)
           + 0.5 * K.k_R * np.trace(_E3 - R_d.T @ R) + K.gamma2 * e_R @ w_t)  # (25)
+    ee_error = float(np.linalg.norm(value_of(task.p_WE - ref.p_ed)))
+    singularity.check_control_kept(sigma_min, ee_error)
     diagnostics = np.concatenate([
         x_t, x_t_dot, e_R, w_t, y_t, z_t,
         [sigma_min, f_d_norm, V1, V_task, V1 + V_task,
          np.linalg.norm(value_of(x_t)), rotation_angle(R_d.T @ R),
-         np.linalg.norm(value_of(task.p_WE - ref.p_ed)),
-         rotation_angle(R_err)],
+         ee_error, rotation_angle(R_err)],
         force_b[:2]])
     f = force_b[2] if force_b.dtype == object else float(force_b[2])
     return ControlOutput(f=f, mu=mu, tau=tau, diagnostics=diagnostics,

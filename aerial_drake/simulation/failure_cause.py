@@ -11,9 +11,10 @@ errors' sigma_min(J_3)), the input limits and the arm's stretch at the failure
 2. ``joint_limit``: the message names a joint limit ("joint limit: ").
 3. ``divergence``: a signal became non-finite (the runner's "first non-finite signal", the
    controller's "not finite", Drake's "NaN").
-4. ``reach``: a singular-Jacobian stop (Assumption 1, or a baseline's "task Jacobian is
-   singular") with the arm stretched, its elbow's span :data:`STRETCHED` or more of its
-   largest (:func:`arm_stretch`), reached by a steady fall of sigma_min(J_3): at least
+4. ``reach``: a singular-Jacobian stop (Assumption 1, a baseline's "task Jacobian is
+   singular", or paper_plus's damped law losing control "near the singularity of J_3") with
+   the arm stretched, its elbow's span :data:`STRETCHED` or more of its largest
+   (:func:`arm_stretch`), reached by a steady fall of sigma_min(J_3): at least
    :data:`STEADY_SHARE` of its steps over the last :data:`STEADY_WINDOW_S` decreasing. The
    task pulled the arm straight (the elbow under a push that moves the CoM away from the end
    effector), not a shake through a singular posture.
@@ -117,7 +118,8 @@ def classify_failure(failure: str | None, *, t: np.ndarray, applied: np.ndarray,
             and (figures["sigma_steady_share"] or 0.0) >= STEADY_SHARE):
         return _result("reach", (
             f"the arm stretched, its elbow's span {figures['arm_stretch']:.3f} of its largest, as "
-            f"sigma_min(J_3) fell steadily to the limit {sigma_limit:g} "
+            f"sigma_min(J_3) fell steadily "
+            + (f"to the limit {sigma_limit:g} " if "Assumption 1" in message else "") +
             f"({100 * figures['sigma_steady_share']:.0f} % of the last {STEADY_WINDOW_S:g} s' "
             "steps decreasing)"), figures)
     if (figures["oscillation_amplitude_ratio"] or 0.0) >= OSCILLATION_AMPLITUDE:
@@ -138,8 +140,10 @@ def classify_failure(failure: str | None, *, t: np.ndarray, applied: np.ndarray,
 
 def singular_stop(message: str) -> bool:
     """Whether a failure message is a singular task Jacobian's stop: the paper law's
-    Assumption 1 ("J_3 is singular") or a baseline's ("task Jacobian is singular")."""
-    return "Assumption 1" in message or "is singular" in message
+    Assumption 1 ("J_3 is singular"), a baseline's ("task Jacobian is singular") or the damped
+    law's loss of control ("near the singularity of J_3", control.law.control_lost_message)."""
+    return ("Assumption 1" in message or "is singular" in message
+            or "near the singularity of J_3" in message)
 
 
 def _result(cause: str, detail: str, figures: dict[str, Any]) -> dict[str, Any]:

@@ -9,7 +9,7 @@ to its diagnostics to the bit (and in this file for the same cache reason as bel
 recompile whenever Section II or the law's kinematics change);
 :mod:`aerial_drake.control.compiled.law` holds the Python entry points.
 
-Why this module is longer than the others (some 770 lines): Section II and the law are one
+Why this module is longer than the others (some 1000 lines): Section II and the law are one
 compile unit. The law's workspace nests Section II's (:func:`_law_buffers` lays out
 :func:`_section2_buffers` first, and :func:`_workspace_size` sizes both), :func:`_section2` is
 inlined into both :func:`_decompose` and :func:`_law`, and the law reads Section II's buffers
@@ -524,6 +524,37 @@ def _sigma_min_J3(J_y, T_inv, w):
     return math.sqrt(max(_min_eigenvalue_sym(w.JtJ, w.vn[13:17]), 0.0))
 
 
+#: The law's limits in the packed arrays, in this order: Assumption 1's sigma_min(J_3) and
+#: Assumption 2's |f_d| thresholds, and the singularity-robust inverse's lambda_max and eps
+#: (control.law.SingularityRobust's damping and threshold; lambda_max 0: off).
+LIMITS_SIZE = 4
+_SIGMA_LIMIT, _F_D_LIMIT, _DAMPING, _THRESHOLD = 0, 1, 2, 3
+
+
+@_inline
+def _damping_squared(sigma_min, limits):
+    """lambda^2 = lambda_max^2 (1 - (sigma_min / eps)^2) below eps, else 0 (Nakamura and
+    Hanafusa's / Chiaverini's variable damping; control.law.SingularityRobust.
+    damping_squared)."""
+    lambda_max, eps = limits[_DAMPING], limits[_THRESHOLD]
+    if not (lambda_max > 0.0 and sigma_min < eps):
+        return 0.0
+    r = sigma_min / eps
+    return lambda_max * lambda_max * (1.0 - r * r)
+
+
+@_jit
+def _damped_inverse_into(J3, lambda2, A, out):
+    """out = J3^# = (J3^T J3 + lambda2 E)^-1 J3^T, the damped least-squares inverse (``A``:
+    scratch of J3's shape)."""
+    _mtm_into(J3, J3, A)
+    for i in range(A.shape[0]):
+        A[i, i] += lambda2
+        for j in range(A.shape[1]):
+            out[i, j] = J3[j, i]
+    _solve_into(A, out)
+
+
 #: The law's parameters (after the tree in the packed arrays, see CompiledLaw).
 _LawParams = namedtuple("_LawParams",
                         "nq ee_body nj rows joint_q joint_v R_BE p_BE gains limits")
@@ -537,7 +568,7 @@ def _unpack_law(model, index):
     R_BE, at = _mat(model, at, 3, 3)
     p_BE, at = _vec(model, at, 3)
     gains, at = _vec(model, at, _packed_gains_size(n))
-    limits, at = _vec(model, at, 2)
+    limits, at = _vec(model, at, LIMITS_SIZE)
     nj = index[k + 2]
     if at != model.shape[0] or k + 3 + n + 2 * nj != index.shape[0]:
         raise ValueError("the packed arrays do not match the tree")
@@ -663,7 +694,7 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
         x_t_dot[i] = xi[i] - xd1[i]
         f_d[i] = m * (xd2[i] + gravity * e3[i]) - K_x[i] * x_t[i] - D_x[i] * x_t_dot[i]  # (10)
     f_d_norm = _norm(f_d)
-    if not f_d_norm > p.limits[1]:
+    if not f_d_norm > p.limits[_F_D_LIMIT]:
         return ASSUMPTION_2, f_d_norm, 0.0
     u1 = _dot(f_d, Re3)  # (11)
     for i in range(3):  # (9a), for the attitude feed-forward
@@ -748,8 +779,10 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
     # Task control (17)-(20).
     sigma_min = _sigma_min_J3(J_y, T_inv, w)
     Jt, J3 = w.Jt, w.J3
-    if not sigma_min > p.limits[0]:
+    # With the damped inverse on, no Assumption 1 stop (the caller checks control is kept).
+    if p.limits[_DAMPING] == 0.0 and not sigma_min > p.limits[_SIGMA_LIMIT]:
         return ASSUMPTION_1, f_d_norm, sigma_min
+    lambda2 = _damping_squared(sigma_min, p.limits)
     R_err = w.R_err
     _mm_into(R_WE, task[3:12].reshape((3, 3)).T, R_err)
     y_t, y_t_dot, y6 = w.y_t[0], w.y_t[1], w.y6
@@ -788,9 +821,12 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
     for i in range(n):
         z_d_dot[i] = y_d_ddot[i] - Ja12[i] - jt_dot_x12[i] - K_y[i] * y_t_dot[i]  # (20)
     # (19): Lambda_z = J3^-T Lambda33 J3^-1, Gamma_z = J3^-T (Gamma33 - Lambda33 J3^-1 J3_dot)
-    # J3^-1, applied to vectors.
+    # J3^-1, applied to vectors. Damped (lambda2 > 0): J3^# in place of J3^-1 (below).
     J3_inv = w.J3_inv
-    _inv_into(J3, w.JtJ, J3_inv)
+    if lambda2 > 0.0:
+        _damped_inverse_into(J3, lambda2, w.JtJ, J3_inv)
+    else:
+        _inv_into(J3, w.JtJ, J3_inv)
     s_d, J3_dot_s, d, a3, lg = w.vn[3], w.vn[4], w.vn[5], w.vn[6], w.vn[7]
     _mv_into(J3_inv, z_d, s_d)  # s = J3^-1 z_d
     u_s = w.u[2]  # T^-1 [0; 0; s]
@@ -804,10 +840,20 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
     _mv_into(J3_inv, d, a3)
     _lambda_gamma_times(M, C, T_inv, a3, 6, u_s, T_dot_u, lg, 6, w.vnv)
     zz, u3 = w.vn[8], w.vn[9]
-    _mtv_into(J3_inv, lg, zz)
-    for i in range(n):
-        zz[i] = zz[i] - K_z[i] * z_t[i]
-    _mtv_into(J3, zz, u3)
+    if lambda2 > 0.0:
+        # u3 = Lambda33 rho_d' + Gamma33 rho_d - J3^T K_z z~ with rho_d = J3^# z_d = s and
+        # rho_d' = J3^# (z_d' - J3_dot s) = a3: the product J3^T J3^-T of the undamped
+        # u3 = J3^T J3^-T lg - J3^T K_z z~ kept as the identity (control.law.compute_control).
+        for i in range(n):
+            zz[i] = K_z[i] * z_t[i]
+        _mtv_into(J3, zz, u3)
+        for i in range(n):
+            u3[i] = lg[i] - u3[i]
+    else:
+        _mtv_into(J3_inv, lg, zz)
+        for i in range(n):
+            zz[i] = zz[i] - K_z[i] * z_t[i]
+        _mtv_into(J3, zz, u3)
 
     # Input mapping (8), (22).
     u_prime, F, force_b = w.u_prime, w.F, w.force_b

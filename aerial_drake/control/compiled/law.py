@@ -12,6 +12,7 @@ from numba import types
 
 from aerial_drake.control.compiled.kernels import (
     GAIN_LAYOUT,
+    LIMITS_SIZE,
     _decompose,
     _law,
     _packed_gains_size,
@@ -19,7 +20,7 @@ from aerial_drake.control.compiled.kernels import (
     _workspace_size,
 )
 from aerial_drake.control.compiled.kinematics import _pack_tree
-from aerial_drake.control.law import diagnostics_size
+from aerial_drake.control.law import NO_DAMPING, SingularityRobust, diagnostics_size
 from aerial_drake.dynamics.kinematic_tree import KinematicTree
 from aerial_drake.robots.task import TaskLayout
 from aerial_drake.trajectories.reference import (
@@ -98,9 +99,12 @@ def compile_law() -> None:
 
 def _pack_law(tree: KinematicTree, num_positions: int,
               end_effector: tuple[int, np.ndarray, np.ndarray], task: TaskLayout,
-              gains: np.ndarray, limits: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+              gains: np.ndarray, limits: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray]:
     """The float and integer arrays the law's kernels unpack (``kernels._unpack_law``): the
-    tree, then the end-effector frame, the gains and the limits; the task's layout."""
+    tree, then the end-effector frame, the gains and the ``LIMITS_SIZE`` limits (in
+    ``kernels.LIMITS_SIZE``'s order); the task's layout."""
+    if len(limits) != LIMITS_SIZE:
+        raise ValueError(f"{len(limits)} limits for the law's {LIMITS_SIZE}")
     body, R_BE, p_BE = end_effector
     nv = tree.reflected_inertia.size
     if task.n != nv - 6:
@@ -128,19 +132,23 @@ class CompiledLaw:
         task: the task's rows and its joints' indices (:class:`TaskLayout`).
         gains: packed by :func:`pack_gains`.
         sigma_min_J3_limit, f_d_limit: the Assumption 1 and 2 thresholds.
+        singularity: the damped inverse near the singularity of J_3 (damping 0: off, the
+            paper's law; with it on, no Assumption 1 status: the caller checks that control
+            is kept, :meth:`SingularityRobust.check_control_kept`).
     """
 
     def __init__(self, tree: KinematicTree, num_positions: int,
                  end_effector: tuple[int, np.ndarray, np.ndarray], task: TaskLayout,
                  gains: np.ndarray, sigma_min_J3_limit: float,
-                 f_d_limit: float):
+                 f_d_limit: float, singularity: SingularityRobust = NO_DAMPING):
         nb, nv = tree.parent.size, tree.reflected_inertia.size
         gains = np.ravel(gains).astype(float)
         # The kernel's own count run as Python (py_func): nothing compiles outside compile_law.
         if gains.size != _packed_gains_size.py_func(nv - 6):
             raise ValueError(f"{gains.size} gains for {nv} velocities: see pack_gains")
         self._model, self._index = _pack_law(tree, num_positions, end_effector, task, gains,
-                                             (sigma_min_J3_limit, f_d_limit))
+                                             (sigma_min_J3_limit, f_d_limit,
+                                              singularity.damping, singularity.threshold))
         self._n_joints = task.n_joints
         self._work = np.zeros(_workspace_size(nb, nv, True))
         self._nq, self._nv = int(num_positions), nv
@@ -182,7 +190,8 @@ class CompiledTracking:
         self.n = nv - 6
         # The law's packing; the kernel reads no gain or limit, so zeros stand for them.
         self._model, self._index = _pack_law(tree, num_positions, end_effector, task,
-                                             np.zeros(17 + 2 * self.n), (0.0, 0.0))
+                                             np.zeros(17 + 2 * self.n),
+                                             (0.0,) * LIMITS_SIZE)
         self._work = np.zeros(_workspace_size(nb, nv, True))
 
     def __call__(self, X: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,

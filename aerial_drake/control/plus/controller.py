@@ -35,12 +35,15 @@ _INTEGRATOR = 2
 def plus_diagnostics_layout(n: int) -> tuple[tuple[str, int], ...]:
     """The paper law's diagnostics (:func:`aerial_drake.control.law.diagnostics_layout`),
     then paper_plus's: the integral terms added to f_d (N) and to z_d, the force fed forward
-    (N), whether integration was held at the sample (1) or not (0), and the wrench
-    compensation added to the vehicle moment (N m, body axes) and the arm torques."""
+    (N), whether integration was held at the sample (1) or not (0), the wrench
+    compensation added to the vehicle moment (N m, body axes) and the arm torques, and the
+    damping of J_3's inverse, lambda^2 / lambda_max^2 (0: exact inverse, 1: full damping;
+    :meth:`~aerial_drake.control.law.SingularityRobust.damping_ratio`)."""
     return diagnostics_layout(n) + (
         ("com_integral_force", 3), ("task_integral_velocity", n),
         ("vehicle_force_feedforward", 3), ("integration_held", 1),
-        ("compensation_moment", 3), ("compensation_torque", n))
+        ("compensation_moment", 3), ("compensation_torque", n)) + (
+        ("singularity_damping", 1),)
 
 
 class PaperPlusController(ControllerBase):
@@ -88,7 +91,8 @@ class PaperPlusController(ControllerBase):
                          diagnostics_layout=plus_diagnostics_layout(n))
         self._law = DecoupledController(
             model.plant, model.end_effector_frame, task, gains,
-            sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit, period=period)
+            sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit, period=period,
+            singularity=params.singularity())
         self._force_port = self.DeclareVectorInputPort("vehicle_force_estimate", 3)
         plant = model.plant
         self._tau_port = self.DeclareVectorInputPort("generalized_force_estimate",
@@ -101,6 +105,7 @@ class PaperPlusController(ControllerBase):
         self.DeclareDiscreteState(9 + 2 * n)  # group _INTEGRATOR (module constants)
         self._n, self._rows, self._h = n, task.rows, float(period)
         self._params = params
+        self._singularity = params.singularity()
         K = GainMatrices.from_gains(gains, n_task=n)
         self._K_x, self._D_x, self._K_y = K.K_x, K.D_x, K.K_y
         self._k_x = np.asarray(params.com_gain(), float)
@@ -173,6 +178,8 @@ class PaperPlusController(ControllerBase):
             diagnostics[d["compensation_torque"]] = 0.0
         saturated = np.any(command < self._lower) or np.any(command > self._upper)
         diagnostics[d["integration_held"]] = float(saturated)
+        diagnostics[d["singularity_damping"]] = self._singularity.damping_ratio(
+            float(diagnostics[d["sigma_min_J3"]][0]))
 
     def evaluate_into(self, t: float, x: np.ndarray, com: np.ndarray, task: np.ndarray,
                       heading: np.ndarray, command: np.ndarray, diagnostics: np.ndarray,

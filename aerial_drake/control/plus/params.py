@@ -9,6 +9,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from aerial_drake.control.law import SingularityRobust
+
 #: ``controller.type`` of the extended controller.
 PAPER_PLUS = "paper_plus"
 
@@ -43,6 +45,34 @@ class PlusParams:
     # i.e. (16) and (20) with observer-corrected accelerations (docs/control.md, "Wrench
     # compensation").
     wrench_compensation: bool = False
+
+    # --- Graceful degradation near the singularity of J_3 (docs/control.md, "Graceful
+    # degradation"; control.law.SingularityRobust) ---
+    # lambda_max of the damped inverse of J_3 (units of sigma_min(J_3)); 0: off, the paper's
+    # Assumption 1 stop.
+    singularity_damping: float = 0.0
+    # eps: the inverse is damped where sigma_min(J_3) < eps.
+    singularity_threshold: float = 0.05
+    # With the damping on, control is lost (the run stops) when the inverse is damped and
+    # the end effector's position error exceeds this (m).
+    singularity_lost_error: float = 0.1
+
+    def singularity(self) -> SingularityRobust:
+        """The damped inverse's parameters, for the law."""
+        return SingularityRobust(damping=float(self.singularity_damping),
+                                 threshold=float(self.singularity_threshold),
+                                 lost_error=float(self.singularity_lost_error))
+
+    def _validate_singularity(self, prefix: str) -> None:
+        """:meth:`validate`'s checks of the singularity fields."""
+        for name in ("singularity_damping", "singularity_threshold", "singularity_lost_error"):
+            value = getattr(self, name)
+            zero_is_off = name == "singularity_damping"
+            if not (_is_number(value) and math.isfinite(value)
+                    and (value >= 0 if zero_is_off else value > 0)):
+                bound = ">= 0 (0: off)" if zero_is_off else "> 0"
+                raise ValueError(f"{prefix}.{name} must be a finite number {bound}; got "
+                                 f"{value!r}")
 
     def com_gain(self) -> list[float]:
         """The CoM integral gain as 3 entries (zeros when empty)."""
@@ -88,4 +118,5 @@ class PlusParams:
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{prefix}.{name} must be true or false; got "
                                  f"{getattr(self, name)!r}")
+        self._validate_singularity(prefix)
         return self
