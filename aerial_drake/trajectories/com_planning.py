@@ -56,14 +56,16 @@ __all__ = ["PlannedComReference", "ComPlanReport", "plan_com", "planned_referenc
 #: B-spline order (degree 7): x_d is C^6, one more than the law's 4 derivatives need.
 ORDER = 8
 #: Exponent of the smooth minimum, and the softplus scale of the joint distances.
-_P = 8.0
+_P = 6.0
 _SOFTPLUS = 0.02
-#: Finite-difference step on the CoM (m) and the optimiser's stop (m, per step).
-_STEP = 1e-6
-_STOP = 1e-7
-_ITERATIONS = 40
-#: Weight of the penalty on the control points' 4th differences (relative to the data's).
-_SMOOTHING = 1e-4
+#: Finite-difference step on the CoM (m); the least curvature of a sample's model (1/m^2);
+#: Newton iterations at most, and their stop (mean decrease of f per sample).
+_STEP = 2e-3
+_CURVATURE = 1.0
+_NEWTON = 8
+_STOP = 1e-4
+#: Weight of the penalty on the control points' 4th differences (1/m^2).
+_SMOOTHING = 1.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -73,16 +75,13 @@ class ComPlanReport:
 
     planned: PostureMargins
     kind: PostureMargins
-    #: The largest |x_d - x_d^kind| over the samples (m), and the fit's largest miss of the
-    #: optimised samples (m).
+    #: The largest |x_d - x_d^kind| over the samples (m).
     max_shift_m: float
-    max_fit_error_m: float
     samples: int
 
     def as_dict(self) -> dict:
         return {"planned": self.planned.as_dict(), "kind": self.kind.as_dict(),
-                "max_shift_m": self.max_shift_m, "max_fit_error_m": self.max_fit_error_m,
-                "samples": self.samples}
+                "max_shift_m": self.max_shift_m, "samples": self.samples}
 
     def line(self) -> str:
         """One line for the run's summary (:func:`plan_summary` of :meth:`as_dict`)."""
@@ -145,46 +144,141 @@ def plan_com(source: ReferenceSource, model: AerialManipulator, duration: float,
              sample_period: float = 0.1, knot_period: float = 0.4) -> PlannedComReference:
     """The reference ``source`` with x_d planned for the arm's margin over [0, ``duration``]
     (module docstring), with its :class:`ComPlanReport`. ValueError naming the time where the
-    task leaves the arm's reach."""
+    kind's own x_d leaves the arm's reach (the plan starts from it)."""
     count = max(int(math.ceil(duration / sample_period - 1e-9)), 2)
     times = np.linspace(0.0, duration, count + 1)
-    optimum = _optimise_samples(source, model, times)
     base = source.sample(times).com[:, 0]
-    delta = _fit(times, optimum - base, duration, knot_period)
+    basis, B = _basis(duration, knot_period, times)
+    samples = _Samples(source, model, times)
+    c = np.zeros((B.shape[1], 3))  # the correction's control points: start at the kind's x_d
+    D = np.diff(np.eye(B.shape[1]), n=4, axis=0)
+    P = _SMOOTHING * np.kron(D.T @ D, np.eye(3))
+
+    def total(values: np.ndarray, c: np.ndarray) -> float:
+        return float(values.sum() + 0.5 * c.reshape(-1) @ P @ c.reshape(-1))
+
+    values = samples.values(base, commit=True)
+    objective = total(values, c)
+    for _ in range(_NEWTON):
+        g, H = samples.derivatives(base + B @ c, values)
+        # Newton on the control points: sum_k f_k(B_k c) by each sample's quadratic model.
+        A = np.einsum("ki,kj,kab->iajb", B, B, H).reshape(c.size, c.size) + P
+        b = np.einsum("ki,ka->ia", B, g).reshape(-1) + P @ c.reshape(-1)
+        step = -np.linalg.solve(A, b).reshape(c.shape)
+        alpha = 1.0
+        while alpha > 1e-3:
+            trial = samples.values(base + B @ (c + alpha * step))
+            if np.all(np.isfinite(trial)) and total(trial, c + alpha * step) < objective:
+                break
+            alpha *= 0.5
+        else:
+            break
+        c = c + alpha * step
+        values = samples.values(base + B @ c, commit=True)
+        improvement, objective = objective - total(values, c), total(values, c)
+        if improvement < _STOP * values.size:
+            break
+    delta = BsplineTrajectory(basis, [row.reshape(3, 1) for row in c])
     planned = PlannedComReference(source, delta)
-    fitted = planned.sample(times).com[:, 0]
     report = ComPlanReport(
         planned=posture_margins(planned, model, times),
         kind=posture_margins(source, model, times),
-        max_shift_m=float(np.max(np.linalg.norm(fitted - base, axis=1))),
-        max_fit_error_m=float(np.max(np.linalg.norm(fitted - optimum, axis=1))),
+        max_shift_m=float(np.max(np.linalg.norm(B @ c, axis=1))),
         samples=int(times.size))
     planned.report = report
     return planned
 
 
 class _Margin:
-    """f(x) of the module docstring at one sample, and the posture it last solved."""
+    """f(x) of the module docstring at one sample, and the posture it solved."""
 
     def __init__(self, postures: LevelPostures, ref, nominal: np.ndarray, radius: float):
         self.postures, self.ref = postures, ref
         self.nominal, self.radius = nominal, radius
         self.R = postures.targets(ref, np.zeros(3))["R_WB"]
+        #: The kind's smallest smooth margins over the run (sigma, joint limits).
+        self.scales = (1.0, 1.0)
+
+    def smooth_margins(self, q: np.ndarray) -> tuple[float, float]:
+        """The smooth minima of sigma(J_3) and of the joint distances at ``q``."""
+        self.postures.model.plant.SetPositions(self.postures.context, q)
+        arm = q[self.postures.model.arm_position_indices]
+        lower, upper = self.postures.lower, self.postures.upper
+        d = np.concatenate([arm - lower, upper - arm]) / np.tile(upper - lower, 2)
+        return (_smooth_min(self.postures.sigmas()),
+                _smooth_min(_SOFTPLUS * np.logaddexp(0.0, d / _SOFTPLUS)))
 
     def __call__(self, x: np.ndarray, q_guess: np.ndarray) -> tuple[float, np.ndarray | None]:
         reach = self.R.T @ (self.ref.p_ed - x) - self.nominal
-        r2 = float(reach @ reach) / self.radius ** 2
-        if r2 >= 1.0:
-            return math.inf, None
         q = self.postures.solve(self.postures.targets(self.ref, x), q_guess, fallback=False)
         if q is None:
             return math.inf, None
-        d = np.concatenate([q[self.postures.model.arm_position_indices] - self.postures.lower,
-                            self.postures.upper - q[self.postures.model.arm_position_indices]])
-        d = d / np.tile(self.postures.upper - self.postures.lower, 2)
-        d = _SOFTPLUS * np.logaddexp(0.0, d / _SOFTPLUS)
-        return (-math.log(_smooth_min(self.postures.sigmas())) - math.log(_smooth_min(d))
-                - math.log1p(-r2)), q
+        sigma, limit = self.smooth_margins(q)
+        if sigma <= 0.0:
+            return math.inf, None
+        return ((self.scales[0] / sigma) ** _P + (self.scales[1] / limit) ** _P
+                + (float(np.linalg.norm(reach)) / self.radius) ** _P), q
+
+
+class _Samples:
+    """f at every sample time, each posture solved from that sample's last accepted one."""
+
+    def __init__(self, source: ReferenceSource, model: AerialManipulator, times: np.ndarray):
+        postures = LevelPostures(model)
+        nominal = nominal_end_effector_offset(model)
+        radius = float(model.description.workspace_radius)
+        ref = source.sample(times)
+        self.times = times
+        self.margins = [_Margin(postures, sample_at(ref, k), nominal, radius)
+                        for k in range(times.size)]
+        self.q: list[np.ndarray] = []
+        q = None
+        for k, margin in enumerate(self.margins):  # the kind's postures, tracked in time
+            try:
+                q = postures.solve(postures.targets(margin.ref, margin.ref.com[0]), q)
+            except UnreachablePose as err:
+                raise ValueError(f"com_planning: no posture realises the task at t = "
+                                 f"{times[k]:.3f} s from the reference's CoM: {err}") from None
+            assert q is not None  # solve() with its fallback returns a posture or raises
+            self.q.append(q)
+        kind = np.array([m.smooth_margins(q) for m, q in zip(self.margins, self.q)])
+        for margin in self.margins:  # each margin relative to the kind's worst
+            margin.scales = (float(kind[:, 0].min()), float(kind[:, 1].min()))
+
+    def values(self, X: np.ndarray, commit: bool = False) -> np.ndarray:
+        """f_k(X[k]) (N); ``commit``: keep the postures as the next starting points."""
+        out = np.empty(len(self.margins))
+        for k, margin in enumerate(self.margins):
+            out[k], q = margin(X[k], self.q[k])
+            if commit and q is None:
+                raise ValueError(f"com_planning: no posture realises the planned CoM at t = "
+                                 f"{self.times[k]:.3f} s (a singular one, or none)")
+            if commit:
+                self.q[k] = q
+        return out
+
+    def derivatives(self, X: np.ndarray, values: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray]:
+        """Gradients (N, 3) and positive definite Hessians (N, 3, 3) of f_k at X[k], by
+        central differences of step _STEP (eigenvalues raised to at least _CURVATURE)."""
+        g, H = np.zeros((len(X), 3)), np.zeros((len(X), 3, 3))
+        E = _STEP * np.eye(3)
+        for k, margin in enumerate(self.margins):
+            f = lambda dx: margin(X[k] + dx, self.q[k])[0]  # noqa: E731
+            plus, minus = [f(e) for e in E], [f(-e) for e in E]
+            if not np.all(np.isfinite(plus + minus)):
+                H[k] = _CURVATURE * np.eye(3)  # at the reach's edge: hold still
+                continue
+            for i in range(3):
+                g[k, i] = (plus[i] - minus[i]) / (2 * _STEP)
+                H[k, i, i] = (plus[i] - 2 * values[k] + minus[i]) / _STEP ** 2
+                for j in range(i):
+                    cross = (f(E[i] + E[j]) - f(E[i] - E[j]) - f(E[j] - E[i])
+                             + f(-E[i] - E[j])) / (4 * _STEP ** 2)
+                    H[k, i, j] = H[k, j, i] = cross if math.isfinite(cross) else 0.0
+            w, V = np.linalg.eigh(H[k])
+            H[k] = (V * np.maximum(w, _CURVATURE)) @ V.T
+        return g, H
 
 
 def _smooth_min(values: np.ndarray) -> float:
@@ -195,99 +289,16 @@ def _smooth_min(values: np.ndarray) -> float:
     return scale * float(np.sum((values / scale) ** -_P)) ** (-1.0 / _P)
 
 
-def _optimise_samples(source: ReferenceSource, model: AerialManipulator,
-                      times: np.ndarray) -> np.ndarray:
-    """x_k, the minimiser of f at each sample time (N, 3)."""
-    postures = LevelPostures(model)
-    nominal = nominal_end_effector_offset(model)
-    radius = float(model.description.workspace_radius)
-    ref = source.sample(times)
-    out = np.empty((times.size, 3))
-    q: np.ndarray | None = None
-    x = ref.com[0, 0].copy()
-    for k, t in enumerate(times):
-        sample = sample_at(ref, k)
-        if k > 0:
-            x = x + ref.com[k, 0] - ref.com[k - 1, 0]  # follow the kind's own x_d
-        margin = _Margin(postures, sample, nominal, radius)
-        value, q_new = margin(x, q) if q is not None else (math.inf, None)
-        if q_new is None:  # no posture near the last: from the kind's x_d, by IK
-            x = ref.com[k, 0].copy()
-            try:
-                q = postures.solve(postures.targets(sample, x), q)
-            except UnreachablePose as err:
-                raise ValueError(f"com_planning: no posture realises the task at t = "
-                                 f"{t:.3f} s from the reference's CoM: {err}") from None
-            value, q_new = margin(x, q)
-        if q_new is None or not math.isfinite(value):
-            raise ValueError(f"com_planning: the reference's posture at t = {t:.3f} s is "
-                             "outside the arm's reach (workspace_radius) or singular: the "
-                             "plan needs a feasible start at every sample")
-        x, q = _bfgs(margin, x, q_new, value)
-        out[k] = x
-    return out
-
-
-def _bfgs(f: _Margin, x: np.ndarray, q: np.ndarray, value: float
-          ) -> tuple[np.ndarray, np.ndarray]:
-    """Minimise f from x (posture q, f(x) = value): BFGS with forward-difference gradients
-    and a backtracking (Armijo) line search; stops when a step is below _STOP."""
-    H = np.eye(3) * 1e-3  # inverse Hessian guess: steps of millimetres first
-    g = _gradient(f, x, q, value)
-    for _ in range(_ITERATIONS):
-        step = -H @ g
-        alpha, accepted = 1.0, None
-        while alpha > 1e-6:
-            trial, q_trial = f(x + alpha * step, q)
-            if q_trial is not None and trial <= value + 1e-4 * alpha * float(g @ step):
-                accepted = (x + alpha * step, q_trial, trial)
-                break
-            alpha *= 0.5
-        if accepted is None:
-            break
-        x_new, q, value = accepted
-        g_new = _gradient(f, x_new, q, value)
-        s, y = x_new - x, g_new - g
-        x, g = x_new, g_new
-        if float(s @ y) > 1e-16:
-            rho = 1.0 / float(s @ y)
-            V = np.eye(3) - rho * np.outer(s, y)
-            H = V @ H @ V.T + rho * np.outer(s, s)
-        if np.linalg.norm(s) < _STOP:
-            break
-    return x, q
-
-
-def _gradient(f: _Margin, x: np.ndarray, q: np.ndarray, value: float) -> np.ndarray:
-    g = np.empty(3)
-    for i in range(3):
-        e = np.zeros(3)
-        e[i] = _STEP
-        forward, _ = f(x + e, q)
-        if math.isfinite(forward):
-            g[i] = (forward - value) / _STEP
-        else:  # at the reach's edge: the backward difference
-            backward, _ = f(x - e, q)
-            g[i] = (value - backward) / _STEP
-    return g
-
-
-def _fit(times: np.ndarray, values: np.ndarray, duration: float, knot_period: float
-         ) -> BsplineTrajectory:
-    """The degree-7 B-spline through ``values`` (N, 3) at ``times`` by least squares, knots
-    every about ``knot_period`` over [0, duration], with a small penalty on the control
-    points' 4th differences (which also settles control points the samples do not fix)."""
+def _basis(duration: float, knot_period: float, times: np.ndarray
+           ) -> tuple[BsplineBasis, np.ndarray]:
+    """The degree-7 B-spline basis with knots every about ``knot_period`` over [0, duration],
+    and its values at ``times`` (N, number of control points)."""
     intervals = max(int(round(duration / knot_period)), 1)
     h = duration / intervals
     # Uniform knots continued past both ends (not clamped there): the curve on [0, duration]
     # is an inner piece, its end derivatives as tame as its middle's (a clamped spline's
-    # blow up at the ends, where few samples hold its last control points).
-    knots = h * np.arange(-(ORDER - 1), intervals + ORDER)
-    basis = BsplineBasis(ORDER, knots.tolist())
-    m = basis.num_basis_functions()
-    B = np.array([[basis.EvaluateBasisFunctionI(i, float(t)) for i in range(m)]
-                  for t in times])
-    D = np.diff(np.eye(m), n=4, axis=0)
-    A = B.T @ B + _SMOOTHING * np.trace(B.T @ B) / m * (D.T @ D)
-    control = np.linalg.solve(A, B.T @ values)
-    return BsplineTrajectory(basis, [c.reshape(3, 1) for c in control])
+    # blow up at the ends, which few samples hold).
+    basis = BsplineBasis(ORDER, (h * np.arange(-(ORDER - 1), intervals + ORDER)).tolist())
+    B = np.array([[basis.EvaluateBasisFunctionI(i, float(t))
+                   for i in range(basis.num_basis_functions())] for t in times])
+    return basis, B

@@ -34,7 +34,7 @@ def planned(model):
 
 
 def test_derivatives_are_the_rates_of_the_ones_below(planned):
-    _, plan = planned
+    source, plan = planned
     h = 1e-4
     times = np.linspace(0.0, DURATION, 41)
     times = np.clip(times, h, DURATION - h)  # central differences inside the plan's span
@@ -49,8 +49,8 @@ def test_derivatives_are_the_rates_of_the_ones_below(planned):
     for k in range(1, 5):
         difference = (ahead[:, k - 1] - behind[:, k - 1]) / (2 * h)
         assert np.abs(difference - com[:, k]).max() < bound, (k, bound)
-    # Not vacuous: the plan moves the CoM with a snap of metres per s^4.
-    assert np.abs(com[:, 4]).max() > 1.0
+    # Not vacuous: the correction moves in time (its rates are checked, not only the kind's).
+    assert np.abs(com[:, 1:] - source.sample(times).com[:, 1:]).max() > 1e-3
 
 
 def test_planned_postures_hold_the_task_with_more_margin_than_rule_33(planned, model):
