@@ -5,28 +5,35 @@ planned with margin"; option ``trajectory.com_planning``).
 
 Construction:
 
-1. every ``sample_period`` over [0, duration], the posture with the task on y_d(t_k) and the
-   vehicle level at the reference heading (:mod:`.com_margins`) is a function of the system
-   CoM x alone (3 + n equations in 3 + n unknowns); x_k minimises
+1. x_d = x_d^kind + delta(t): the kind's own CoM reference (rule (33) for the paper and
+   waypoints kinds) plus a correction delta, a degree-7 B-spline (Drake's BsplineTrajectory)
+   on uniform knots every ``knot_period`` continued past both ends of [0, duration], so x_d
+   is C^6 and its first four derivatives are the exact rates of the curve flown;
+2. every ``sample_period`` t_k, the posture with the task on y_d(t_k) and the vehicle level at
+   the reference heading (the quasi-static choice, :mod:`.com_margins`) is a function of the
+   system CoM x alone (3 + n equations in 3 + n unknowns: Newton from the sample's last
+   posture, Drake's InverseKinematics for the first), and
 
-       f(x) = -log smin(sigma(J_3)) - log smin(d(q)) - log(1 - |e(x)|^2 / rho^2)
+       f_k(x) = (sigma_0 / smin sigma(J_3))^6 + (d_0 / smin d(q))^6 + (|e(x)| / rho)^6
 
-   where smin(v) = (sum v_i^-8)^(-1/8) is a smooth minimum, sigma(J_3) the singular values of
-   J_3 of (17), d(q) each arm joint's distance to both its limits as a fraction of its range
-   (passed through a softplus of 0.02, so a joint the task itself drives past a limit leaves a
-   finite, flat term), e(x) the end effector's offset from x in the heading frame minus the
-   nominal posture's, and rho the robot's ``workspace_radius``: the three margins Assumption 1,
-   the joint limits and the reach, with no weight to tune. Quasi-Newton (BFGS) steps with
-   finite-difference gradients, from the previous sample's optimum moved as the kind's own
-   x_d moves; every posture by Newton from the last (Drake's InverseKinematics where Newton
-   fails);
-2. the corrections x_k - x_d^kind(t_k) are fitted by least squares with a degree-7 B-spline
-   (Drake's BsplineTrajectory, knots every ``knot_period``, a small penalty on the control
-   points' 4th differences), so the planned x_d = x_d^kind + delta(t) is C^6 with its first four
-   derivatives exact for the curve flown, and holds no motion faster than the knots (which
-   the CoM loop, slower than the task's, could not follow anyway);
-3. the margins of the postures that realise the planned x_d, and of the kind's own, are
-   reported (:class:`ComPlanReport`).
+   where smin(v) = (sum v_i^-6)^(-1/6) is a smooth minimum, sigma(J_3) the singular values of
+   J_3 of (17) (Assumption 1), d(q) each arm joint's distance to both its limits as a
+   fraction of its range (through a softplus of 0.02, so a joint the task itself drives past
+   a limit leaves a finite, flat term), e(x) the end effector's offset from x in the heading
+   frame minus the nominal posture's, rho the robot's ``workspace_radius`` (the reach), and
+   sigma_0, d_0 the kind's own worst smooth margins over the run: each term is 1 where the
+   kind is worst, so the sum over k is a soft maximum over time of the three normalised
+   shortfalls, with no weight to tune;
+3. the control points minimise sum_k f_k(x_d(t_k)) plus a small penalty on their 4th
+   differences (which settles those the samples barely hold): Newton steps with each sample's
+   gradient and Hessian by central differences (2 mm; the Hessian made positive definite),
+   a backtracking line search, from delta = 0 (so never worse than the kind's in that sum);
+4. the margins of the postures that realise the planned x_d, and of the kind's own, are
+   reported (:class:`ComPlanReport`): the exact sigma_min(J_3), not the smooth one.
+
+The knots set the plan's bandwidth: 0.4 s lets x_d follow the paper's agile motion (3 rad/s)
+in part; 1-2 s keeps only slow shifts (gentler on the vehicle, less margin at the worst
+instant). docs/control.md gives the figures.
 """
 
 from __future__ import annotations
@@ -55,14 +62,15 @@ __all__ = ["PlannedComReference", "ComPlanReport", "plan_com", "planned_referenc
 
 #: B-spline order (degree 7): x_d is C^6, one more than the law's 4 derivatives need.
 ORDER = 8
-#: Exponent of the smooth minimum, and the softplus scale of the joint distances.
+#: Exponent of the smooth minima and of the soft maximum over time; the softplus scale of
+#: the joint distances (fraction of range).
 _P = 6.0
 _SOFTPLUS = 0.02
 #: Finite-difference step on the CoM (m); the least curvature of a sample's model (1/m^2);
 #: Newton iterations at most, and their stop (mean decrease of f per sample).
 _STEP = 2e-3
 _CURVATURE = 1.0
-_NEWTON = 8
+_NEWTON = 6
 _STOP = 1e-4
 #: Weight of the penalty on the control points' 4th differences (1/m^2).
 _SMOOTHING = 1.0
@@ -250,11 +258,12 @@ class _Samples:
         out = np.empty(len(self.margins))
         for k, margin in enumerate(self.margins):
             out[k], q = margin(X[k], self.q[k])
-            if commit and q is None:
+            if not commit:
+                continue
+            if q is None:
                 raise ValueError(f"com_planning: no posture realises the planned CoM at t = "
                                  f"{self.times[k]:.3f} s (a singular one, or none)")
-            if commit:
-                self.q[k] = q
+            self.q[k] = q
         return out
 
     def derivatives(self, X: np.ndarray, values: np.ndarray
