@@ -344,10 +344,10 @@ class TrajectoryParams:
             errors.append(f"'joint_targets' must hold finite angles (rad), got "
                           f"{self.joint_targets!r}")
         errors += self.com_planning.errors()
-        if self.com_planning.enabled is True and self.kind == "waypoints" and \
-                self.waypoints.com == "waypoints":
-            errors.append("'com_planning.enabled' is true but the CoM is given (waypoints.com: "
-                          "waypoints), and the plan would replace it: set com: offset, or "
-                          "com_planning.enabled: false")
+        given = {"waypoints": self.waypoints.com == "waypoints", "hover": bool(self.hover.com)}
+        if self.com_planning.enabled is True and given.get(self.kind, False):
+            errors.append(f"'com_planning.enabled' is true but the {self.kind} section gives the "
+                          "CoM, which the plan would replace: remove the section's com (or set "
+                          "waypoints.com: offset), or set com_planning.enabled: false")
         return errors
 

@@ -114,3 +114,11 @@ def test_a_scenario_with_a_bad_option_names_the_field():
     with pytest.raises(ScenarioError) as err:
         load_scenario("nominal", overrides={"trajectory.com_planning.sample_period": 0.0})
     assert "com_planning.sample_period" in str(err.value)
+
+
+def test_a_given_com_and_planning_are_refused_together():
+    params = TrajectoryParams(kind="hover", com_planning=ComPlanningParams(enabled=True))
+    validate_trajectory(params)  # the hover's CoM by rule (33): the plan may replace it
+    params.hover.com = [0.3, 0.0, 1.4]
+    with pytest.raises(ValueError, match="'com_planning.enabled' is true but the hover section"):
+        validate_trajectory(params)
