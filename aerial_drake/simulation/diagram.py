@@ -253,8 +253,8 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
     model = scenario.controller_model()
     n = model.n
 
-    # The run's reference, built once: the checks, the start posture, the logs and Meshcat
-    # read this same object (``reference.source``).
+    # The run's reference, built once (its x_d planned here if trajectory.com_planning is on):
+    # the checks, the start posture, the logs and Meshcat read this object (reference.source).
     source = planned_reference(reference_of(scenario.trajectory, model.task_joint_nominal()),
                                scenario.trajectory.com_planning, model, scenario.duration)
     reference = builder.AddSystem(ReferenceGenerator(source))
