@@ -19,6 +19,7 @@ thrust follows (docs/control.md, "Table II's attitude root is slower than the Co
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass
 
@@ -64,8 +65,9 @@ class LoopRoots:
     @property
     def separation(self) -> float:
         """How many times faster the slowest attitude root decays than the slowest CoM root
-        (their real parts' ratio)."""
-        return float(self.slowest_attitude.real / self.slowest_com.real)
+        (their real parts' ratio); infinite if the CoM loop has a root at zero (K_x = 0)."""
+        com = self.slowest_com.real
+        return math.inf if com == 0.0 else float(self.slowest_attitude.real / com)
 
     def fast_enough(self, factor: float = ATTITUDE_SEPARATION) -> bool:
         return self.separation >= factor

@@ -63,6 +63,7 @@ from aerial_drake.simulation.disturbances import (
 from aerial_drake.simulation.scenarios import Scenario
 from aerial_drake.simulation.sensing import add_state_sensor
 from aerial_drake.simulation.wind import add_wind
+from aerial_drake.trajectories.com_planning import planned_reference
 from aerial_drake.trajectories.generator import ReferenceGenerator
 from aerial_drake.trajectories.kinds import reference_of
 
@@ -252,9 +253,10 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
     model = scenario.controller_model()
     n = model.n
 
-    # The run's reference, built once: the checks, the start posture, the logs and Meshcat
-    # read this same object (``reference.source``).
-    source = reference_of(scenario.trajectory, model.task_joint_nominal())
+    # The run's reference, built once (its x_d planned here if trajectory.com_planning is on):
+    # the checks, the start posture, the logs and Meshcat read this object (reference.source).
+    source = planned_reference(reference_of(scenario.trajectory, model.task_joint_nominal()),
+                               scenario.trajectory.com_planning, model, scenario.duration)
     reference = builder.AddSystem(ReferenceGenerator(source))
     reference.set_name("reference")
     # Sampling: the paper's controller runs at 1 kHz and holds its command between samples

@@ -6,6 +6,7 @@ dictionaries (metrics.json's content); nothing is printed here."""
 from __future__ import annotations
 
 from aerial_drake.simulation.metrics import saturated_after_key
+from aerial_drake.trajectories.com_planning import plan_summary
 
 
 def _table(header: list[str], rows: list[list[str]]) -> str:
@@ -38,6 +39,8 @@ def format_summary(m: dict) -> str:
                          f"{r['window_s'][1]:g} s: response partial (the log ends at "
                          f"{r['log_end_s']:g} s, before {r['evaluated_s'][1]:g} s); its peaks "
                          "are those of the part logged")
+    if m.get("com_planning"):  # trajectory.com_planning: the plan's margins, once
+        lines.append(plan_summary(m["com_planning"]))
     late = next((k for k in m if k.startswith("saturated_s_after")), None)
     sat = [k for k, v in m["saturated_s_total"].items() if v > 0]
     if not sat:

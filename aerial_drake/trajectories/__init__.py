@@ -3,5 +3,6 @@ the ``trajectory:`` section (:mod:`.params`), the kinds (paper (27)-(33) :mod:`.
 :mod:`.hover`, waypoints :mod:`.waypoints`, python :mod:`.python_kind`) in one registry with
 one entry point (:mod:`.kinds`: ``REFERENCE_KINDS``, ``validate_trajectory``,
 ``reference_of``), the Drake source of any of them (:mod:`.generator`,
-``ReferenceGenerator``), and the test that a sampled reference is as smooth as the law needs
-(:mod:`.continuity`)."""
+``ReferenceGenerator``), the test that a sampled reference is as smooth as the law needs
+(:mod:`.continuity`), and any kind's x_d planned for the arm's margin (:mod:`.com_planning`,
+its postures' margins :mod:`.com_margins`; option ``com_planning``)."""

@@ -31,7 +31,7 @@ import numpy as np
 from aerial_drake.trajectories.orientation import EeOrientation, orientation_errors
 
 __all__ = ["TrajectoryParams", "HoverParams", "Waypoint", "WaypointsParams",
-           "PythonParams", "COM_RULES", "HEADING_RULES"]
+           "PythonParams", "ComPlanningParams", "COM_RULES", "HEADING_RULES"]
 
 #: How the waypoints kind finds the CoM: rule (33) from the end-effector path, or its own
 #: waypoints.
@@ -219,6 +219,36 @@ class PythonParams:
 
 
 @dataclasses.dataclass
+class ComPlanningParams:
+    """``trajectory.com_planning``: replace the kind's CoM reference x_d by one planned
+    offline for the arm's margin (:mod:`aerial_drake.trajectories.com_planning`;
+    docs/control.md, "x_d planned with margin"). Off: the kind's own x_d, unchanged."""
+
+    enabled: bool = False
+    # Period of the postures optimised along the run (s); the plan's cost grows as 1/period.
+    sample_period: float = 0.1
+    # Knot spacing of the degree-7 B-spline fitted through them (s): the plan keeps no motion
+    # faster than about this (the CoM loop could not follow it), and x_d is C^6.
+    knot_period: float = 0.4
+
+    def errors(self, prefix: str = "com_planning.") -> list[str]:
+        """What is wrong with the section, one message per field naming it and the fix."""
+        found = []
+        if not isinstance(self.enabled, bool):
+            found.append(f"'{prefix}enabled' must be true or false, got {self.enabled!r}")
+        for name, low, high in (("sample_period", 0.005, 1.0), ("knot_period", 0.05, 5.0)):
+            value = getattr(self, name)
+            if not _is_finite_number(value) or not low <= value <= high:
+                found.append(f"'{prefix}{name}' must be a time in [{low:g}, {high:g}] s, got "
+                             f"{value!r}")
+        if not found and self.knot_period < 2 * self.sample_period:
+            found.append(f"'{prefix}knot_period' = {self.knot_period!r} s must be at least "
+                         f"twice '{prefix}sample_period' = {self.sample_period!r} s (each knot "
+                         "interval needs samples): raise knot_period or lower sample_period")
+        return found
+
+
+@dataclasses.dataclass
 class TrajectoryParams:
     """The ``trajectory:`` section: the kind and its numbers; the top-level constants are the
     paper kind's (28)-(33) (defaults: the paper's values).
@@ -262,6 +292,8 @@ class TrajectoryParams:
     hover: HoverParams = dataclasses.field(default_factory=HoverParams)
     waypoints: WaypointsParams = dataclasses.field(default_factory=WaypointsParams)
     python: PythonParams = dataclasses.field(default_factory=PythonParams)
+    # The CoM reference planned for the arm's margin instead of the kind's (default off).
+    com_planning: ComPlanningParams = dataclasses.field(default_factory=ComPlanningParams)
 
     def errors(self) -> list[str]:
         """What is wrong with the fields every kind shares and the paper kind's (the kind's
@@ -311,5 +343,11 @@ class TrajectoryParams:
                 _is_finite_number(x) for x in targets):
             errors.append(f"'joint_targets' must hold finite angles (rad), got "
                           f"{self.joint_targets!r}")
+        errors += self.com_planning.errors()
+        given = {"waypoints": self.waypoints.com == "waypoints", "hover": bool(self.hover.com)}
+        if self.com_planning.enabled is True and given.get(self.kind, False):
+            errors.append(f"'com_planning.enabled' is true but the {self.kind} section gives the "
+                          "CoM, which the plan would replace: remove the section's com (or set "
+                          "waypoints.com: offset), or set com_planning.enabled: false")
         return errors
 
