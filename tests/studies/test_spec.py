@@ -53,14 +53,15 @@ def test_shipped_studies_load():
              for name in dut.shipped_studies()}
     sizes = {name: len(runs) for name, runs in plans.items()}
     assert sizes == {"robustness": 200, "gains": 25, "gains_attitude": 25, "directions": 200,
-                     "directions_plus": 200, "robustness_plus": 20}
+                     "directions_plus": 200, "robustness_plus": 20, "gains_plus": 25,
+                     "gains_attitude_plus": 25}
     # The control draws the robustness study's directions, without its model error.
     robust, control = plans["robustness"], plans["directions"]
     for a, b in zip(robust, control):
         assert a.values["random_disturbances.seed"] == b.values["random_disturbances.seed"]
         assert b.values["payload.mass"] == 0.0
     # The _plus studies draw as their paper twins do, draw for draw, with paper_plus.
-    for name in ("directions", "robustness"):
+    for name in ("directions", "robustness", "gains", "gains_attitude"):
         for a, b in zip(plans[name], plans[name + "_plus"]):
             assert a.values == b.values
             plus = dut.scenario_from_text(b.scenario_text)

@@ -9,7 +9,7 @@ from aerial_drake.simulation.scenarios import load_scenario
 from aerial_drake.studies.spec import load_study
 
 SHIPPED_STUDIES = ("robustness", "directions", "directions_plus", "gains", "gains_attitude",
-                   "robustness_plus")
+                   "robustness_plus", "gains_plus", "gains_attitude_plus")
 
 
 def test_study_base_differs_from_disturbed_only_where_documented():
