@@ -16,15 +16,15 @@ import dataclasses
 import sys
 
 from aerial_drake.control.plus import PlusParams
-from aerial_drake.simulation.runner import SimulationFailed, run_scenario
-from aerial_drake.simulation.scenarios import load_scenario
+from aerial_drake.simulation.runner import RunResult, SimulationFailed, run_scenario
+from aerial_drake.simulation.scenarios import Scenario, load_scenario
 from aerial_drake.simulation.scenarios.schema import Disturbance, Observer
 from aerial_drake.simulation.tracking import entries
 
 R = dataclasses.replace
 
 
-def variant(scenario, name: str):
+def variant(scenario: Scenario, name: str) -> Scenario:
     if name.startswith("plus"):
         scenario = R(scenario, observer=Observer(enabled=True, bandwidth=20.0),
                      controller=R(scenario.controller, type="paper_plus", plus=PlusParams(
@@ -46,12 +46,13 @@ def main() -> None:
         scenario = R(base, duration=duration, disturbances=[push])
         for name in names:
             try:
-                result = run_scenario(variant(scenario, name), progress=False)
+                result: RunResult | None = run_scenario(variant(scenario, name),
+                                                        progress=False)
             except SimulationFailed as failed:
                 result = failed.result
-                if result is None:
-                    print(f"F = {force} {name}: {failed}")
-                    continue
+            if result is None:
+                print(f"F = {force} {name}: could not run")
+                continue
             tracking = entries(result.log["tracking"], result.layouts["tracking"])
             t = result.log["t"]
             ee, com = tracking["ee_position_error"][:, 0], tracking["com_error"][:, 0]

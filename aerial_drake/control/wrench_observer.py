@@ -22,7 +22,8 @@ Ports (by name):
 The outputs are held discrete state (no direct feedthrough), so a controller may feed on them
 without an algebraic loop. :func:`add_wrench_observer` adds one to a builder;
 :func:`add_scenario_observer` as a scenario's ``observer`` section asks, and connects the
-external force to the controller's ``vehicle_force_estimate`` input.
+external force to the controller's ``vehicle_force_estimate`` input and ``r`` to its
+``generalized_force_estimate`` input (paper_plus's).
 """
 
 from __future__ import annotations

@@ -106,7 +106,8 @@ def bound_end_effector_windows(scenario: Scenario, model: AerialManipulator,
     it, bounding the result again changes nothing. The input is not modified.
 
     Raises ScenarioError naming ``random_disturbances.arm_hold_fraction`` when gravity alone
-    takes more than the fraction of a joint's limit at a window's edge."""
+    takes more than the fraction of a joint's limit at a posture along a window
+    (:func:`hold_times`)."""
     fraction = scenario.random_disturbances.arm_hold_fraction
     if fraction == 0 or not any(d.target == "end_effector" for d in scenario.disturbances):
         return scenario

@@ -72,9 +72,12 @@ class LevelPostures:
 
     def limit_fractions(self, q: np.ndarray) -> np.ndarray:
         """Each arm joint's distance to its nearer limit as a fraction of its range (< 0:
-        past it)."""
+        past it; inf for a joint without limits)."""
         q_arm = q[self.model.arm_position_indices]
-        return np.minimum(q_arm - self.lower, self.upper - q_arm) / (self.upper - self.lower)
+        span = self.upper - self.lower
+        with np.errstate(invalid="ignore"):
+            fraction = np.minimum(q_arm - self.lower, self.upper - q_arm) / span
+        return np.where(np.isfinite(span), fraction, np.inf)
 
     def limit_ratios(self, q: np.ndarray) -> np.ndarray:
         """Each arm joint's q / (its limit on that side): 1 at the limit."""

@@ -221,7 +221,11 @@ class _Margin:
         self.postures.model.plant.SetPositions(self.postures.context, q)
         arm = q[self.postures.model.arm_position_indices]
         lower, upper = self.postures.lower, self.postures.upper
-        d = np.concatenate([arm - lower, upper - arm]) / np.tile(upper - lower, 2)
+        span = np.tile(upper - lower, 2)
+        with np.errstate(invalid="ignore"):
+            d = np.concatenate([arm - lower, upper - arm]) / span
+        # A joint without limits (continuous) is never near one: a full range away.
+        d = np.where(np.isfinite(span), d, 1.0)
         return (_smooth_min(self.postures.sigmas()),
                 _smooth_min(_SOFTPLUS * np.logaddexp(0.0, d / _SOFTPLUS)))
 

@@ -175,6 +175,20 @@ def test_a_bad_singularity_option_stops_the_scenario_at_load():
         run_scenario(scenario, progress=False)
 
 
+def test_a_threshold_at_or_below_the_assumption_1_limit_is_refused_with_damping_on():
+    """With damping on the Assumption 1 stop is off: the damping must start above its
+    limit, or a near-singular J_3 would be inverted exactly with nothing to stop the run."""
+    scenario = _damped(_push_scenario(0.6), singularity_threshold=0.001)
+    assert scenario.sigma_min_J3_limit == 0.001
+    with pytest.raises(ScenarioError, match="must be above sigma_min_J3_limit") as err:
+        scenario.validate()
+    assert err.value.field == "controller.plus.singularity_threshold"
+    off = dataclasses.replace(scenario, controller=dataclasses.replace(
+        scenario.controller, plus=dataclasses.replace(scenario.controller.plus,
+                                                      singularity_damping=0.0)))
+    off.validate()  # damping off: the threshold is not read
+
+
 # --- Closed loop -----------------------------------------------------------------------------
 
 def _push_scenario(push_time):

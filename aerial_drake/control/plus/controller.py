@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 from pydrake.multibody.tree import JacobianWrtVariable
-from pydrake.systems.framework import Context
+from pydrake.systems.framework import Context, InputPort
 
 from aerial_drake.control.base import ControllerBase, at_time
 from aerial_drake.control.controller import DecoupledController
@@ -131,10 +131,10 @@ class PaperPlusController(ControllerBase):
     def params(self) -> PlusParams:
         return self._params
 
-    def get_vehicle_force_estimate_input_port(self):
+    def get_vehicle_force_estimate_input_port(self) -> InputPort:
         return self._force_port
 
-    def get_generalized_force_estimate_input_port(self):
+    def get_generalized_force_estimate_input_port(self) -> InputPort:
         return self._tau_port
 
     # --- The law on shaped references ---------------------------------------------------
@@ -158,6 +158,9 @@ class PaperPlusController(ControllerBase):
         # With the wrench compensated the model's x_g'' in (20) gets the estimated force too
         # (observer-corrected accelerations throughout; docs/control.md, "Wrench
         # compensation"); alone, that term made matters worse (the comment above).
+        # F^ here is r's force rows (the total external force, unfiltered by the split into
+        # the vehicle's and the end effector's wrenches that external_force_estimate is):
+        # the same force as compensation() uses, so (20) and the compensation agree.
         accel = tau_hat[3:6] / self._m if self._params.wrench_compensation else np.zeros(3)
         e1, e2 = task_shift(self._K_y, self._k_y, s_y, rate_y, self._rows, accel)
         com, task = shaped_references(com, task, d_com, e1, e2, self._rows)
@@ -184,8 +187,9 @@ class PaperPlusController(ControllerBase):
     def evaluate_into(self, t: float, x: np.ndarray, com: np.ndarray, task: np.ndarray,
                       heading: np.ndarray, command: np.ndarray, diagnostics: np.ndarray,
                       ) -> None:
-        """The law with the integrator state and the force of the next sample: those left
-        by the latest sample this controller ran (zero before any), as the update after
+        """The law with the integrator state, the force and the generalized force of the
+        next sample: those left by the latest sample this controller ran (or held at the
+        run's start), as the update after
         the last logged sample computes them (the run's log takes its last row so,
         :mod:`aerial_drake.simulation.run_log`). A run's samples read the held state."""
         self._run(t, x, com, task, heading, *self._latest, command, diagnostics)
@@ -232,7 +236,9 @@ class PaperPlusController(ControllerBase):
                       command, diagnostics)
         except (AssumptionViolation, FloatingPointError) as err:
             raise at_time(err, context) from None
-        if advance:
+        if not advance:  # the run's start: evaluate_into reads this run's values, not a
+            self._latest = (state, force, tau_hat)  # previous run's of the same diagram
+        else:
             new = self._advance(state, diagnostics)
             discrete_state.get_mutable_value(_INTEGRATOR)[:] = new
             self._latest = (new, force, tau_hat)

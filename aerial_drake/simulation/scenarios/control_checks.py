@@ -34,6 +34,16 @@ def check_controller(s: Any, n: int, mass: float) -> None:
         unstable = controller.plus.com_gain_error(mass, s.gains.K_x, s.gains.D_x)
         if unstable:
             raise ScenarioError(unstable, "controller.plus.com_integral_gain")
+    plus = controller.plus
+    if (controller.type == PAPER_PLUS and plus.singularity_damping > 0
+            and not plus.singularity_threshold > s.sigma_min_J3_limit):
+        # With damping on the Assumption 1 stop is off: an eps at or below its limit would
+        # run the exact inverse through a near-singular J_3 with nothing to stop it.
+        raise ScenarioError(
+            f"controller.plus.singularity_threshold = {plus.singularity_threshold:g} must be "
+            f"above sigma_min_J3_limit = {s.sigma_min_J3_limit:g} when singularity_damping is "
+            "on (the damping replaces the Assumption 1 stop below the threshold): raise it, "
+            "e.g. 0.05", "controller.plus.singularity_threshold")
     # In a run only the observer feeds these options' ports; unfed, they would read zero,
     # silently.
     for name, what in (("vehicle_force_feedforward", "the force on the vehicle"),
