@@ -87,7 +87,8 @@ def run_batch(scenarios: dict[str, Scenario], folders: dict[str, Path], *, jobs:
     building its scenario with ``rebuild(key)`` (picklable: a module-level function or a
     ``functools.partial`` of one). On a signal in this process the pending runs are
     cancelled and the workers terminated (SIGTERM: a running simulation writes its logs up to
-    there, as in one process), then waited for. ``labels[key]``: the progress line's name.
+    there, as in one process), then waited for and joined: none is left when this returns.
+    ``labels[key]``: the progress line's name.
     """
     batch = Batch()
     labels = labels or {}
