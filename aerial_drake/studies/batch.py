@@ -8,7 +8,9 @@ from __future__ import annotations
 
 import concurrent.futures
 import multiprocessing
+import multiprocessing.connection
 import signal
+import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, TextIO
@@ -20,6 +22,8 @@ from aerial_drake.simulation.scenarios import Scenario
 
 #: Seconds a terminated worker gets to write the logs of its interrupted run before it is killed.
 WORKER_STOP_TIMEOUT_S = 60.0
+#: Seconds the pool's own thread gets to finish once its workers have exited (it joins them).
+POOL_THREAD_STOP_TIMEOUT_S = 10.0
 
 
 @dataclass
@@ -83,7 +87,8 @@ def run_batch(scenarios: dict[str, Scenario], folders: dict[str, Path], *, jobs:
     building its scenario with ``rebuild(key)`` (picklable: a module-level function or a
     ``functools.partial`` of one). On a signal in this process the pending runs are
     cancelled and the workers terminated (SIGTERM: a running simulation writes its logs up to
-    there, as in one process), then waited for. ``labels[key]``: the progress line's name.
+    there, as in one process), then waited for and joined: none is left when this returns.
+    ``labels[key]``: the progress line's name.
     """
     batch = Batch()
     labels = labels or {}
@@ -198,17 +203,40 @@ def _run_pooled(batch: Batch, scenarios: dict[str, Scenario], folders: dict[str,
 def _stop_pool(pool: concurrent.futures.ProcessPoolExecutor,
                futures: dict[str, concurrent.futures.Future]) -> None:
     """Cancel the runs not started, terminate the workers (SIGTERM, so a running simulation
-    writes its logs) and wait for them (killed after :data:`WORKER_STOP_TIMEOUT_S`)."""
+    writes its logs), wait for them to exit (killed after :data:`WORKER_STOP_TIMEOUT_S`) and
+    join them: on return no worker is running and every worker's exit is recorded (none is
+    left in ``multiprocessing.active_children()``)."""
     for future in futures.values():
         future.cancel()
     # The executor has no public way to stop its workers before Python 3.14.
     processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool_thread = getattr(pool, "_executor_manager_thread", None)
     pool.shutdown(wait=False, cancel_futures=True)
+    for process in _running(processes, 0.0):  # (by its sentinel: a pid already reaped is
+        process.terminate()                   # never signalled, it may be another's now)
+    running = _running(processes, WORKER_STOP_TIMEOUT_S)
+    for process in running:
+        process.kill()
+    _running(running, WORKER_STOP_TIMEOUT_S)
+    # The pool's own thread joins the workers too. Of two threads waiting for one child, one
+    # gets its exit status and the other an error (ECHILD) that leaves the child "alive" to
+    # multiprocessing until the first thread records the status, which a loaded machine can
+    # delay past our return. So the pool's thread finishes first, then each worker is joined.
+    if pool_thread is not None:
+        pool_thread.join(POOL_THREAD_STOP_TIMEOUT_S)
     for process in processes:
-        if process.is_alive():
-            process.terminate()
-    for process in processes:
-        process.join(WORKER_STOP_TIMEOUT_S)
-        if process.is_alive():
-            process.kill()
-            process.join()
+        process.join(POOL_THREAD_STOP_TIMEOUT_S)
+
+
+def _running(processes: list[Any], timeout: float) -> list[Any]:
+    """Those of ``processes`` that have not exited after waiting up to ``timeout`` seconds for
+    all of them (a process's sentinel is ready once it has exited; no status is reaped)."""
+    deadline = time.monotonic() + timeout
+    pending = {process.sentinel: process for process in processes}
+    while pending:
+        for sentinel in multiprocessing.connection.wait(
+                list(pending), max(0.0, deadline - time.monotonic())):
+            del pending[sentinel]
+        if time.monotonic() >= deadline:
+            break
+    return list(pending.values())
