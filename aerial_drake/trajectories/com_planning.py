@@ -125,9 +125,15 @@ class PlannedComReference(ReferenceSource):
         self.report = report
 
     def correction(self, t: float) -> np.ndarray:
-        """delta and its 1st..4th derivatives at t (5, 3); t clamped to the plan's span."""
-        t = min(max(float(t), self._span[0]), self._span[1])
-        return np.array([rate.value(t)[:, 0] for rate in self._rates])
+        """delta and its 1st..4th derivatives at t (5, 3). Outside the plan's span delta
+        holds its value at the nearer end and its derivatives are zero, so that the
+        corrected x_d stays consistent with its own derivatives there."""
+        start, end = self._span
+        if start <= t <= end:
+            return np.array([rate.value(float(t))[:, 0] for rate in self._rates])
+        out = np.zeros((5, 3))
+        out[0] = self.delta.value(start if t < start else end)[:, 0]
+        return out
 
     def fill(self, t: float, out: np.ndarray) -> None:
         self.source.fill(t, out)

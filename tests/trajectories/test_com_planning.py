@@ -57,6 +57,18 @@ def test_derivatives_are_the_rates_of_the_ones_below(planned):
     np.testing.assert_allclose(start[1:], kind_start[1:], atol=1e-9)
 
 
+def test_past_the_plans_span_the_correction_holds_still(planned):
+    """After the plan's span (a window or a check sampling past the run) the correction keeps
+    its end value with zero rates: x_d stays consistent with its derivatives."""
+    _, plan = planned
+    end = plan.correction(DURATION)
+    after = plan.correction(DURATION + 0.5)
+    np.testing.assert_array_equal(after[0], end[0])
+    np.testing.assert_array_equal(after[1:], 0.0)
+    assert np.abs(end[1:]).max() > 0.0  # not vacuous: the rates at the end are not zero
+    np.testing.assert_array_equal(plan.correction(-1.0)[1:], 0.0)
+
+
 def test_planned_postures_hold_the_task_with_more_margin_than_rule_33(planned, model):
     source, plan = planned
     report = plan.report
