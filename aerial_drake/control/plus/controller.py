@@ -42,8 +42,7 @@ def plus_diagnostics_layout(n: int) -> tuple[tuple[str, int], ...]:
     return diagnostics_layout(n) + (
         ("com_integral_force", 3), ("task_integral_velocity", n),
         ("vehicle_force_feedforward", 3), ("integration_held", 1),
-        ("compensation_moment", 3), ("compensation_torque", n)) + (
-        ("singularity_damping", 1),)
+        ("compensation_moment", 3), ("compensation_torque", n), ("singularity_damping", 1))
 
 
 class PaperPlusController(ControllerBase):
@@ -89,10 +88,11 @@ class PaperPlusController(ControllerBase):
         params.validate(n)
         super().__init__(model.plant, task, period=period,
                          diagnostics_layout=plus_diagnostics_layout(n))
+        self._singularity = params.singularity()
         self._law = DecoupledController(
             model.plant, model.end_effector_frame, task, gains,
             sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit, period=period,
-            singularity=params.singularity())
+            singularity=self._singularity)
         self._force_port = self.DeclareVectorInputPort("vehicle_force_estimate", 3)
         plant = model.plant
         self._tau_port = self.DeclareVectorInputPort("generalized_force_estimate",
@@ -105,7 +105,6 @@ class PaperPlusController(ControllerBase):
         self.DeclareDiscreteState(9 + 2 * n)  # group _INTEGRATOR (module constants)
         self._n, self._rows, self._h = n, task.rows, float(period)
         self._params = params
-        self._singularity = params.singularity()
         K = GainMatrices.from_gains(gains, n_task=n)
         self._K_x, self._D_x, self._K_y = K.K_x, K.D_x, K.K_y
         self._k_x = np.asarray(params.com_gain(), float)
@@ -189,9 +188,9 @@ class PaperPlusController(ControllerBase):
                       ) -> None:
         """The law with the integrator state, the force and the generalized force of the
         next sample: those left by the latest sample this controller ran (or held at the
-        run's start), as the update after
-        the last logged sample computes them (the run's log takes its last row so,
-        :mod:`aerial_drake.simulation.run_log`). A run's samples read the held state."""
+        run's start), as the update after the last logged sample computes them (the run's
+        log takes its last row so, :mod:`aerial_drake.simulation.run_log`). A run's samples
+        read the held state."""
         self._run(t, x, com, task, heading, *self._latest, command, diagnostics)
 
     def _advance(self, state: np.ndarray, diagnostics: np.ndarray) -> np.ndarray:
