@@ -36,9 +36,10 @@ def test_the_stop_returns_with_every_worker_joined_when_the_pool_reaps_late(monk
     workers = set(multiprocessing.active_children()) - before
     assert len(workers) == 2
     monkeypatch.setattr(os, "waitpid", waitpid)
-    start = time.monotonic()
     batch._stop_pool(pool, futures)
-    assert time.monotonic() - start < 30  # terminated, not waited out (the runs take 60 s)
     assert {w.name: w.exitcode for w in workers if w.exitcode is None} == {}
+    # Terminated by a signal, not waited out (a worker that finished its 60 s runs would
+    # have exited with 0): no bound on the wall time, which would depend on the machine.
+    assert all(w.exitcode < 0 for w in workers), {w.name: w.exitcode for w in workers}
     assert not workers & set(multiprocessing.active_children())
     assert futures["2"].cancelled() or futures["2"].done()
