@@ -65,8 +65,12 @@ def study_client(workers: int | None = None,
         n = workers or os.cpu_count() or 1
         with dask.config.set({"distributed.scheduler.allowed-failures": ALLOWED_FAILURES}):
             # Each worker preloads the worker module: it ignores Ctrl-C (worker.dask_setup).
+            # Its logs are silenced below CRITICAL: when a signal stops the study, a worker's
+            # heartbeat to the closing scheduler fails and distributed logs that as an ERROR
+            # with a traceback (seen with Python 3.12 and distributed 2026); a run's own
+            # errors are its row, and a dead worker is KilledWorker, so nothing is lost.
             cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                   dashboard_address=None, silence_logs=logging.ERROR,
+                                   dashboard_address=None, silence_logs=logging.CRITICAL,
                                    preload=["aerial_drake.studies.worker"])
         client = Client(cluster)
     try:
