@@ -36,6 +36,8 @@ def report_error(args: argparse.Namespace, status: int, err: BaseException | str
 EXIT_STATUSES = {
     "aerial_drake.simulation.scenarios.checks.ScenarioError": 2,  # bad input
     "aerial_drake.dynamics.equilibrium.UnreachablePose": 2,       # bad input (the start pose)
+    "aerial_drake.robots.description.RobotDescriptionError": 2,   # bad input (a description)
+    "aerial_drake.analysis.onboarding.errors.OnboardingError": 2,  # robot init/check input
     "aerial_drake.simulation.outputs.ResultsNotWritten": 3,       # results lost (a full disk)
     "aerial_drake.simulation.outputs.OutputError": 2,             # the output folder
     "aerial_drake.simulation.runner.SimulationFailed": 1,         # the run failed

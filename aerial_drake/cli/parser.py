@@ -12,6 +12,7 @@ from aerial_drake.cli import analyze as analyze_command
 from aerial_drake.cli import compare as compare_command
 from aerial_drake.cli import info as info_command
 from aerial_drake.cli import plot as plot_command
+from aerial_drake.cli import robot as robot_command
 from aerial_drake.cli import run as run_command
 from aerial_drake.cli import study as study_command
 
@@ -152,6 +153,7 @@ def build_parser() -> argparse.ArgumentParser:
     analyze.add_argument("--quiet", action="store_true", help="no progress lines")
     analyze.set_defaults(func=analyze_command.cmd_analyze)
     _add_study_parsers(sub, common)
+    _add_robot_parsers(sub, common)
     return parser
 
 
@@ -195,3 +197,55 @@ def _add_study_parsers(sub: Any, common: argparse.ArgumentParser) -> None:
     plot.add_argument("--formats", nargs="+", default=["png", "svg"], choices=["png", "svg",
                                                                                 "pdf"])
     plot.set_defaults(func=study_command.cmd_study_plot)
+
+
+def _add_robot_parsers(sub: Any, common: argparse.ArgumentParser) -> None:
+    """Add ``robot init`` and ``robot check`` (docs/robots.md, "From a URDF to a flying
+    scenario")."""
+    robot = sub.add_parser(
+        "robot", parents=[common], help="onboard a robot of your own: 'robot init MODEL' writes "
+        "a robot description and a hover scenario; 'robot check FILE' prints its margins",
+        description="'robot init MODEL.urdf|sdf' finds the vehicle, the arm and the end "
+        "effector, chooses a nominal posture, computes the CoM offset, the locked inertia, "
+        "input limits and gains, and writes NAME.robot.yaml and NAME_hover.yaml, which run as "
+        "written. 'robot check FILE' prints the margins at the nominal posture (docs/robots.md).")
+    actions = robot.add_subparsers(dest="robot_command", required=True)
+    init = actions.add_parser(
+        "init", parents=[common], formatter_class=_Defaults,
+        help="write NAME.robot.yaml and NAME_hover.yaml from a URDF or SDF model")
+    init.add_argument("model", help="the model file (.urdf or .sdf): a free vehicle body and a "
+                      "serial arm of actuated revolute joints below it")
+    init.add_argument("--vehicle", default=None, help="the vehicle's body (default: the free "
+                      "body the arm hangs from; asked for when the model has several)")
+    init.add_argument("--end-effector", default=None, metavar="FRAME",
+                      help="the end-effector frame or body (default: the tip of the arm's "
+                      "chain; the candidates are listed)")
+    init.add_argument("--name", default=None, help="the robot's name (default: the model's)")
+    init.add_argument("--out", default=None, help="where to write (default: the model's "
+                      "folder)")
+    init.add_argument("--thrust-to-weight", type=float, default=2.0,
+                      help="the vehicle's maximum thrust over the whole robot's weight")
+    init.add_argument("--body-torque", nargs=3, default=None, metavar=("X", "Y", "Z"),
+                      help="body torque bounds (N m; default: from the vehicle's size and "
+                      "the thrust, docs/robots.md)")
+    init.add_argument("--tool-axis", default="z", choices=["x", "y", "z", "-x", "-y", "-z"],
+                      help="the end-effector frame's axis that --tool-direction points")
+    init.add_argument("--tool-direction", default="any", help="where the tool axis points at "
+                      "the nominal posture: down, forward, any, or a World vector 'x,y,z'")
+    init.add_argument("--task", default=None, help="the task's components, comma-separated "
+                      "(default: the pose, with joint components for arms of other than 6 "
+                      "joints, docs/robots.md)")
+    init.add_argument("--force", action="store_true", help="overwrite existing files")
+    init.add_argument("--quiet", action="store_true", help="no progress lines")
+    init.add_argument("--json", action="store_true", help="also print the result as JSON")
+    init.set_defaults(func=robot_command.cmd_robot_init)
+    check = actions.add_parser(
+        "check", parents=[common], formatter_class=_Defaults,
+        help="the margins at the nominal posture: Assumption 1, reach, pushes, wrench, roots")
+    check.add_argument("file", help="a robot description (NAME.robot.yaml; its gains from "
+                       "NAME_hover.yaml beside it) or a scenario YAML")
+    check.add_argument("--scenario", default=None, help="the scenario whose gains and hover "
+                       "are checked (default: NAME_hover.yaml beside the description)")
+    check.add_argument("--quiet", action="store_true", help="no progress lines")
+    check.add_argument("--json", action="store_true", help="also print the report as JSON")
+    check.set_defaults(func=robot_command.cmd_robot_check)
