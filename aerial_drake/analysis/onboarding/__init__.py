@@ -5,5 +5,6 @@ description and a hover scenario) and ``robot check`` (:func:`check_robot`: the 
 nominal posture)."""
 
 from aerial_drake.analysis.onboarding.errors import OnboardingError
+from aerial_drake.analysis.onboarding.init import InitOptions, InitResult, format_init, init_robot
 
-__all__ = ["OnboardingError"]
+__all__ = ["InitOptions", "InitResult", "OnboardingError", "format_init", "init_robot"]
