@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from pydrake.multibody.plant import MultibodyPlant
-from pydrake.multibody.tree import Frame, Joint, ModelInstanceIndex, RigidBody
+from pydrake.multibody.tree import Frame, Joint, JointIndex, ModelInstanceIndex, RigidBody
 
 from aerial_drake.analysis.onboarding.errors import OnboardingError
 from aerial_drake.robots.parsing import make_parser
@@ -160,7 +160,8 @@ def _tip_of_chain(plant: MultibodyPlant, vehicle: RigidBody) -> RigidBody:
         parents.setdefault(key, []).append(joint)
     for key, below in parents.items():
         if len(below) > 1:
-            where = "the vehicle" if key < 0 else f"the joint '{plant.get_joint(key).name()}'"
+            where = ("the vehicle" if key < 0
+                     else f"the joint '{plant.get_joint(JointIndex(key)).name()}'")
             raise OnboardingError(
                 f"the arm branches below {where} (actuated joints "
                 f"{', '.join(j.name() for j in below)}): the law needs one serial chain; give "
@@ -211,15 +212,14 @@ def discover(model: Path, vehicle: str | None = None, end_effector: str | None =
     actuated = _actuated(plant)
     if end_effector is not None:
         name, is_body = end_effector, any(b.name() == end_effector for b in _bodies(plant))
-        if not is_body and not any(plant.get_frame(i).name() == end_effector
-                                   for i in plant.GetFrameIndices()):
-            frames = sorted({plant.get_frame(i).name() for i in plant.GetFrameIndices()
-                             if not plant.get_frame(i).name().startswith("__")})
+        frames = [plant.get_frame(i) for m in range(plant.num_model_instances())
+                  for i in plant.GetFrameIndices(ModelInstanceIndex(m))]
+        if not is_body and not any(f.name() == end_effector for f in frames):
+            names = sorted({f.name() for f in frames if not f.name().startswith("__")})
             raise OnboardingError(f"--end-effector {end_effector}: no such frame or body; "
-                                  f"frames: {', '.join(frames)}", "--end-effector")
+                                  f"frames: {', '.join(names)}", "--end-effector")
         frame_body = (_find_body(plant, name, "--end-effector") if is_body else next(
-            plant.get_frame(i).body() for i in plant.GetFrameIndices()
-            if plant.get_frame(i).name() == end_effector))
+            f.body() for f in frames if f.name() == end_effector))
         chain = [j for j in _chain_to(plant, base, frame_body) if int(j.index()) in actuated]
         tip = chain[-1].child_body() if chain else base
         candidates = _candidates(plant, tip)

@@ -78,7 +78,8 @@ class InitResult:
     scenario_path: Path
     discovery: Discovery
     task: tuple[str, ...]
-    tasks_tried: list[tuple[tuple[str, ...], float]]  # (task, its posture's score)
+    #: (task, its posture's score), the singular ones (J_3 singular everywhere) at 0.
+    tasks_tried: list[tuple[tuple[str, ...], float]]
     posture: Posture
     limits: InputLimits
     gains: ScaledGains
@@ -185,6 +186,7 @@ def init_robot(options: InitOptions, stream: TextIO | None = None) -> InitResult
     model_entry = Path(str(model)).relative_to(out).as_posix() if model.is_relative_to(
         out) else str(model)
     tried, limits = [], None
+    singular: list[tuple[str, ...]] = []  # tasks J_3 cannot hold anywhere
     for task in tasks:
         robot = _description(found, name, model_entry, task, robot_path)
         manip = make_plant(robot=robot)
@@ -199,6 +201,7 @@ def init_robot(options: InitOptions, stream: TextIO | None = None) -> InitResult
             if len(tasks) == 1:
                 raise
             _say(stream, f"  task {list(task)}: J_3 singular at every posture drawn")
+            singular.append(task)
             continue
         tried.append((task, posture, robot, manip))
         _say(stream, f"  task {list(task)}: sigma_min(J_3) {posture.sigma_min_J3:.4g}, joint "
@@ -223,8 +226,10 @@ def init_robot(options: InitOptions, stream: TextIO | None = None) -> InitResult
                               "off); give another direction, or any", "--tool-direction")
     robot.nominal_posture = [float(f"{x:.8g}") for x in posture.q_arm]
     manip = make_plant(robot=robot)
-    return _finish(options, found, name, task, tried, key, posture, limits, robot, manip,
-                   robot_path, scenario_path, model_entry, stream)
+    result = _finish(options, found, name, task, tried, key, posture, limits, robot, manip,
+                     robot_path, scenario_path, model_entry, stream)
+    result.tasks_tried += [(t, 0.0) for t in singular]
+    return result
 
 
 def _finish(options, found, name, task, tried, key, posture, limits, robot, manip,

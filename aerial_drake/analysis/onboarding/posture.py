@@ -26,6 +26,7 @@ import numpy as np
 
 from aerial_drake.analysis.equilibria import hover_inputs
 from aerial_drake.analysis.onboarding.errors import OnboardingError
+from aerial_drake.control.law import SIGMA_MIN_J3_LIMIT
 from aerial_drake.dynamics.equilibrium import kinematic_J3
 from aerial_drake.robots.models import AerialManipulator
 
@@ -156,7 +157,7 @@ def choose_posture(manip: AerialManipulator, *, tool_axis: np.ndarray,
         q, pointing = ev.project(q)
         found.append((q, *ev.terms(q), pointing))
     sigma_ref = max(f[1] for f in found)
-    if not sigma_ref > 0:
+    if not sigma_ref > SIGMA_MIN_J3_LIMIT:
         raise OnboardingError(f"task {list(manip.description.task)}: J_3 is singular at every "
                               "posture drawn, so the arm cannot hold this task (Assumption 1): "
                               "choose other components with --task", "--task")

@@ -122,10 +122,10 @@ trajectory:
   kind: hover
   # r_o of (33): the system's CoM minus the end effector at the nominal posture, in the
   # heading frame (what kind: waypoints with com: offset and the paper kind add to p_ed).
-  com_offset: {_list(h.com_offset)}
+  com_offset: {_list(h.com_offset, 10)}
   hover:
     # The end effector where the nominal posture puts it with the CoM at {list(HOVER_COM)}.
-    ee_position: {_list(h.ee_position)}
+    ee_position: {_list(h.ee_position, 10)}
     ee_orientation: {{quaternion: {_list(h.ee_quaternion, 9)}}}
     heading: 0.0
     com: {_list(HOVER_COM)}
