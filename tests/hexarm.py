@@ -26,8 +26,9 @@ JOINTS = (("pan_joint", "hexacopter", "pan", (0.0, 0.0, -0.08), (0, 0, 1), 3.0, 
           ("shoulder_joint", "pan", "upper_arm", (0.0, 0.0, -0.06), (0, 1, 0), 2.6, 28.0),
           ("elbow_joint", "upper_arm", "forearm", (0.0, 0.0, -0.24), (0, 1, 0), 2.8, 14.0),
           ("wrist_1_joint", "forearm", "wrist_1", (0.0, 0.0, -0.21), (0, 1, 0), 3.0, 6.0),
-          ("wrist_2_joint", "wrist_1", "wrist_2", (0.0, 0.0, -0.06), (0, 0, 1), 3.0, 6.0),
-          ("wrist_3_joint", "wrist_2", "wrist_3", (0.0, 0.0, -0.06), (0, 1, 0), 3.0, 6.0))
+          ("wrist_2_joint", "wrist_1", "wrist_2", (0.0, 0.0, -0.06), (1, 0, 0), 3.0, 6.0),
+          # The flange turns about the tool's axis, as on a UR arm.
+          ("wrist_3_joint", "wrist_2", "wrist_3", (0.0, 0.0, -0.06), (0, 0, 1), 3.0, 6.0))
 ROTOR_RADIUS = 0.45  # m, the rotors' centres from the vehicle's axis
 
 

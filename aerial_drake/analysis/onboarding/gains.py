@@ -13,13 +13,15 @@ robot from its description (one source for every number).
   CoM's: docs/control.md, "Gain design help"), so the thrust turns before the CoM drifts.
 - **task** ``K_z``: Table II's value of the row's kind (position, orientation, joint),
   lowered where a pole of ``-Lambda_z^-1 K_z`` (the task's inner loop, (23)) would pass
-  :data:`TASK_POLE_LIMIT` times the control rate (a light wrist has a small task inertia:
-  K_z = 30 there would put a pole far past the sampling, docs/robots.md, "The quadrotor with
-  the UR3e"). ``K_y``: Table II's value of the row's kind, but the position rows' on a row
-  whose K_z was lowered: the row's error follows ``z~ / K_y`` (23), and a soft row (small
-  K_z) is pushed by the stiff rows through ``Lambda_z``'s coupling (measured on a hexacopter
-  with a 6-joint arm: K_y = 10 on its capped orientation rows let a 10 mrad start offset grow
-  to 305 mrad; 30 held it to 117 mrad).
+  :data:`TASK_POLE_LIMIT` times the control rate, at the nominal posture or at any of
+  :data:`NEARBY_POSTURES` postures about it (each joint within :data:`NEARBY_SPREAD`): a
+  light wrist has a small task inertia, and K_z = 30 there would put a pole far past the
+  sampling (docs/robots.md, "The quadrotor with the UR3e").
+- **task** ``K_y``: Table II's value of the row's kind, but the position rows' on a row whose
+  K_z was lowered: the row's error follows ``z~ / K_y`` (23), and a soft row (small K_z) is
+  pushed by the stiff rows through ``Lambda_z``'s coupling (measured on a hexacopter with a
+  6-joint arm: K_y = 10 on its capped orientation rows let a 10 mrad start offset grow to
+  305 mrad; 30 held it to 117 mrad).
 """
 
 from __future__ import annotations
@@ -39,6 +41,12 @@ from aerial_drake.robots.task import POSE_ROWS
 
 #: The fastest task pole allowed, as a fraction of the control rate 1/period.
 TASK_POLE_LIMIT = 0.3
+#: How many postures about the nominal the task poles are checked at, and how far each arm
+#: joint moves there (rad): the inertia a light wrist shows a task row changes fast with the
+#: posture (measured: a pole of 292 1/s at a hexacopter arm's nominal reached 2100 1/s 0.1 rad
+#: away, and the sampled loop diverged).
+NEARBY_POSTURES = 40
+NEARBY_SPREAD = 0.3
 #: The shipped scenario whose gains are Table II's.
 TABLE_II_SCENARIO = "nominal"
 
@@ -52,6 +60,7 @@ class ScaledGains:
     Lambda_z: np.ndarray  # (n, n) at the nominal posture
     task_poles: np.ndarray  # eigenvalues of -Lambda_z^-1 K_z (1/s)
     capped_rows: tuple[int, ...]  # task rows whose K_z was lowered
+    fastest_nearby: float  # the fastest task pole over the nearby postures (1/s)
 
 
 def _kind(row: int) -> str:
@@ -94,23 +103,44 @@ def task_inertia(manip: AerialManipulator, q: np.ndarray) -> tuple[np.ndarray, n
     return d.Lambda[3:6, 3:6], J3_inv.T @ d.Lambda[6:, 6:] @ J3_inv  # (19)
 
 
-def _capped_K_z(K_z: np.ndarray, Lambda_z: np.ndarray, limit: float
+def _fastest(K: np.ndarray, inertias: list[np.ndarray]) -> float:
+    return max(float(np.max(np.linalg.eigvals(np.linalg.solve(L, np.diag(K))).real))
+               for L in inertias)
+
+
+def _capped_K_z(K_z: np.ndarray, inertias: list[np.ndarray], limit: float
                 ) -> tuple[np.ndarray, tuple[int, ...]]:
-    """``K_z`` with every eigenvalue of ``Lambda_z^-1 K_z`` at most ``limit``: each row first
-    at most ``limit`` times the inertia that row sees alone, ``1 / (Lambda_z^-1)_ii`` (the
+    """``K_z`` with every eigenvalue of ``Lambda_z^-1 K_z`` at most ``limit`` for each
+    ``Lambda_z`` of ``inertias`` (the first the nominal posture's): each row first at most
+    ``limit`` times the smallest inertia that row sees alone, ``1 / (Lambda_z^-1)_ii`` (the
     row's own pole), then the rows so lowered scaled together until the coupled poles are
     under the limit too."""
-    row_inertia = 1.0 / np.diag(np.linalg.inv(Lambda_z))
+    row_inertia = np.min([1.0 / np.diag(np.linalg.inv(L)) for L in inertias], axis=0)
     K = np.minimum(K_z, limit * row_inertia)
     capped = np.flatnonzero(K < K_z)
     for _ in range(100):
-        fastest = float(np.max(np.linalg.eigvals(np.linalg.solve(Lambda_z, np.diag(K))).real))
+        fastest = _fastest(K, inertias)
         if fastest <= limit * (1 + 1e-9):
             break
         scale = np.ones_like(K)
         scale[capped if capped.size else np.arange(K.size)] = 0.98 * limit / fastest
         K = K * scale
     return K, tuple(int(i) for i in capped)
+
+
+def nearby_positions(manip: AerialManipulator, q: np.ndarray, count: int = NEARBY_POSTURES,
+                     spread: float = NEARBY_SPREAD, seed: int = 0) -> list[np.ndarray]:
+    """``q`` and ``count`` positions with each arm joint moved uniformly within ``spread``
+    rad (inside its limits): the postures a run near the nominal visits."""
+    rng = np.random.default_rng(seed)
+    lower, upper = manip.arm_position_limits()
+    arm = manip.arm_position_indices
+    out = [q]
+    for _ in range(count):
+        moved = q.copy()
+        moved[arm] = np.clip(q[arm] + rng.uniform(-spread, spread, arm.size), lower, upper)
+        out.append(moved)
+    return out
 
 
 def scaled_gains(manip: AerialManipulator, q: np.ndarray, controller_period: float
@@ -129,7 +159,8 @@ def scaled_gains(manip: AerialManipulator, q: np.ndarray, controller_period: flo
     assert manip.task is not None
     kinds = [_kind(r) for r in manip.task.rows]
     K_z0 = np.array([by_kind.get(k, by_kind["position"])[1] for k in kinds], float)
-    K_z, capped = _capped_K_z(K_z0, Lambda_z, TASK_POLE_LIMIT / controller_period)
+    inertias = [Lambda_z] + [task_inertia(manip, p)[1] for p in nearby_positions(manip, q)[1:]]
+    K_z, capped = _capped_K_z(K_z0, inertias, TASK_POLE_LIMIT / controller_period)
     # A row with a lowered K_z takes the position rows' K_y: its stiffness K_y K_z falls less
     # and its error follows z~ / K_y closer (the shipped quadrotor_ur3e's choice).
     K_y = [by_kind["position"][0] if i in capped else by_kind.get(k, by_kind["position"])[0]
@@ -139,4 +170,5 @@ def scaled_gains(manip: AerialManipulator, q: np.ndarray, controller_period: flo
                   K_y=[float(k) for k in K_y], K_z=[float(k) for k in K_z])
     poles = -np.linalg.eigvals(np.linalg.solve(Lambda_z, np.diag(K_z)))
     return ScaledGains(gains=gains, mass=m, paper_mass=m_II, Lambda_22=Lambda_22,
-                       Lambda_z=Lambda_z, task_poles=poles, capped_rows=capped)
+                       Lambda_z=Lambda_z, task_poles=poles, capped_rows=capped,
+                       fastest_nearby=_fastest(K_z, inertias))

@@ -37,6 +37,7 @@ from aerial_drake.analysis.onboarding.writer import (
     HoverFile,
     RobotFile,
     hover_text,
+    pick_and_place_text,
     robot_text,
 )
 from aerial_drake.control.baselines.tuning import locked_inertia
@@ -75,7 +76,8 @@ class InitResult:
     """What ``robot init`` found, chose and wrote."""
 
     robot_path: Path
-    scenario_path: Path
+    scenario_path: Path  # the hover
+    pick_and_place_path: Path
     discovery: Discovery
     task: tuple[str, ...]
     #: (task, its posture's score), the singular ones (J_3 singular everywhere) at 0.
@@ -95,6 +97,7 @@ class InitResult:
         g = self.gains.gains
         return {
             "robot": str(self.robot_path), "scenario": str(self.scenario_path),
+            "pick_and_place": str(self.pick_and_place_path),
             "vehicle_body": self.discovery.vehicle_body,
             "arm_joints": list(self.discovery.arm_joints),
             "end_effector": self.discovery.end_effector,
@@ -175,7 +178,7 @@ def init_robot(options: InitOptions, stream: TextIO | None = None) -> InitResult
     name = re.sub(r"[^A-Za-z0-9_.-]", "_", options.name or found.model_name)
     out = (options.out or model.parent).expanduser().resolve()
     robot_path, scenario_path = out / f"{name}.robot.yaml", out / f"{name}_hover.yaml"
-    for path in (robot_path, scenario_path):
+    for path in (robot_path, scenario_path, out / f"{name}_pick_and_place.yaml"):
         if path.exists() and not options.force:
             raise OnboardingError(f"{path} exists: give --force to overwrite it, or --name/"
                                   "--out to write elsewhere", "--force")
@@ -282,14 +285,19 @@ def _finish(options, found, name, task, tried, key, posture, limits, robot, mani
         com_offset=com_offset, ee_position=np.array(HOVER_COM) + ee_offset,
         ee_quaternion=np.array([quaternion.w(), quaternion.x(), quaternion.y(),
                                 quaternion.z()]))
+    hover_yaml = hover_text(hover)
+    pick_path = scenario_path.with_name(f"{name}_pick_and_place.yaml")
     write_text_atomically(robot_path, robot_text(robot_file))
-    write_text_atomically(scenario_path, hover_text(hover))
-    _say(stream, f"  wrote {robot_path} and {scenario_path}")
+    write_text_atomically(scenario_path, hover_yaml)
+    write_text_atomically(pick_path, pick_and_place_text(hover, hover_yaml))
+    _say(stream, f"  wrote {robot_path.name}, {scenario_path.name} and {pick_path.name}")
     from aerial_drake.simulation.scenarios import load_scenario
 
-    load_scenario(scenario_path)  # what was written loads and validates as a run's would
+    for path in (scenario_path, pick_path):  # what was written loads and validates as a run's
+        load_scenario(path)
     return InitResult(
-        robot_path=robot_path, scenario_path=scenario_path, discovery=found, task=task,
+        robot_path=robot_path, scenario_path=scenario_path, pick_and_place_path=pick_path,
+        discovery=found, task=task,
         tasks_tried=[(t[0], key(t)) for t in tried], posture=posture, limits=limits,
         gains=gains, mass=mass, com_offset=com_offset, ee_offset=ee_offset,
         locked_inertia=inertia, workspace_radius=workspace)
@@ -302,8 +310,8 @@ def _list3(v) -> str:
 def format_init(r: InitResult) -> str:
     """The result as the command line prints it."""
     g = r.gains.gains
-    lines = [f"robot init: {r.robot_path.name} and {r.scenario_path.name} in "
-             f"{r.robot_path.parent}",
+    lines = [f"robot init: {r.robot_path.name}, {r.scenario_path.name} and "
+             f"{r.pick_and_place_path.name} in {r.robot_path.parent}",
              f"  vehicle '{r.discovery.vehicle_body}', arm {list(r.discovery.arm_joints)}, end "
              f"effector '{r.discovery.end_effector}' (candidates: "
              f"{', '.join(r.discovery.candidates)})",

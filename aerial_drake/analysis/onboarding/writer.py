@@ -4,6 +4,7 @@ every number (docs/robots.md, "robot init"): ``NAME.robot.yaml`` (the descriptio
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -137,3 +138,55 @@ actuation:
   saturate: true
 disturbances: []
 """
+
+
+#: The pick-and-place cycle ``robot init`` writes: (time s, end-effector displacement from its
+#: hover position m (World), heading rad), the shipped pick_and_place's shape: approach,
+#: descend, hold (grasp), lift, move while turning a quarter turn, descend, hold (release),
+#: lift. The vehicle carries the arm (the CoM follows at r_o, (33)): the distances are the
+#: vehicle's, not the arm's reach.
+PICK_AND_PLACE = ((0.0, (0.0, 0.0, 0.0), 0.0), (2.0, (0.3, 0.3, -0.1), 0.0),
+                  (3.5, (0.3, 0.3, -0.4), 0.0), (5.0, (0.3, 0.3, -0.4), 0.0),
+                  (6.5, (0.3, 0.3, -0.1), 0.0), (9.5, (-0.2, 0.9, -0.1), math.pi / 2),
+                  (11.0, (-0.2, 0.9, -0.4), math.pi / 2), (12.5, (-0.2, 0.9, -0.4), math.pi / 2),
+                  (14.0, (-0.2, 0.9, -0.1), math.pi / 2))
+PICK_AND_PLACE_DURATION = 15.0
+
+
+def _quaternion_times_z(q: np.ndarray, angle: float) -> np.ndarray:
+    """The quaternion of R_z(angle) R(q), [w, x, y, z]."""
+    c, s = math.cos(angle / 2), math.sin(angle / 2)
+    w, x, y, z = q
+    return np.array([c * w - s * z, c * x - s * y, c * y + s * x, c * z + s * w])
+
+
+def pick_and_place_text(h: HoverFile, hover_text_: str) -> str:
+    """The hover scenario's file with its trajectory replaced by :data:`PICK_AND_PLACE` from
+    the hover's end-effector pose, the tool turning with the heading."""
+    head, _, rest = hover_text_.partition("trajectory:\n")
+    _, _, tail = rest.partition("initial:\n")
+    head = head.replace(f"name: {h.name}", f"name: {h.name.removesuffix('_hover')}"
+                        "_pick_and_place").replace(
+        f"duration: {HOVER_DURATION}", f"duration: {PICK_AND_PLACE_DURATION}")
+    head = head.replace("""description: >-
+  Hover at the nominal posture from a small start offset: the gains and limits robot init
+  computed (docs/robots.md, "robot init").""", """description: >-
+  Pick and place (waypoints, rest to rest): approach, descend, hold, lift, move with a
+  quarter turn, descend, hold, lift; the gains and limits robot init computed.""")
+    lines = []
+    for time, move, heading in PICK_AND_PLACE:
+        p = np.asarray(h.ee_position) + move
+        q = _quaternion_times_z(np.asarray(h.ee_quaternion), heading)
+        lines.append(f"      - {{time: {time:g}, ee_position: {_list(p, 10)}, ee_orientation: "
+                     f"{{quaternion: {_list(q, 9)}}}, heading: {heading:.10g}}}")
+    trajectory = f"""trajectory:
+  kind: waypoints
+  # r_o of (33): the CoM follows the end effector at this offset, turned with the heading.
+  com_offset: {_list(h.com_offset, 10)}
+  waypoints:
+    com: offset
+    heading: given
+    points:
+{chr(10).join(lines)}
+"""
+    return head + trajectory + "initial:\n" + tail
