@@ -19,6 +19,10 @@ samples a period ``h`` apart (:func:`find_discontinuity`):
 The samples come from any reference kind (e.g. a
 :class:`~aerial_drake.trajectories.base.ReferenceSource`'s ``sample``), so the test serves
 every one.
+
+Where the knots are known (the waypoints kind's), :func:`knot_jumps` checks them directly:
+each signal's one-sided limits at each knot, extrapolated from samples just before and just
+after it, must agree (a jump stays as the samples close in, a continuous change vanishes).
 """
 
 from __future__ import annotations
@@ -40,6 +44,12 @@ BISECTIONS = 12
 MISMATCH_RATIO = 1.0
 #: Changes below this fraction of a signal's largest value are rounding, not jumps.
 RELATIVE_FLOOR = 1e-6
+#: The one-sided limits of :func:`knot_jumps` from samples this far and twice as far from a
+#: knot (s), then again at a tenth of it.
+KNOT_STEP = 1e-4
+#: Limits that differ by less than this times (1 + the signal's size) agree: the linear
+#: extrapolation's error is about step^2 |s''|, 1e-8 |s''| at KNOT_STEP.
+KNOT_TOLERANCE = 1e-7
 
 #: The chains of signals, lowest first: each entry's derivative is the next one.
 CHAINS: tuple[tuple[str, ...], ...] = (
@@ -57,7 +67,7 @@ class Discontinuity:
 
     time: float  # s
     signal: str  # e.g. "x_d''''"
-    kind: str  # "jump", "mismatch" or "non-finite"
+    kind: str  # "jump", "knot", "mismatch" or "non-finite"
     size: float  # the jump, or the difference from the finite difference
     expected: float  # the neighbours' change, or the tolerance
 
@@ -68,6 +78,10 @@ class Discontinuity:
             return (f"{self.signal} jumps at t = {self.time:.6f} s: it changes by "
                     f"{self.size:.3g} within microseconds, while it changes by about "
                     f"{self.expected:.3g} over each neighbouring sample interval")
+        if self.kind == "knot":
+            return (f"{self.signal} jumps at the knot t = {self.time:.6f} s: its limits from "
+                    f"before and after differ by {self.size:.3g} (tolerance "
+                    f"{self.expected:.3g})")
         return (f"{self.signal} at t = {self.time:.6f} s is not the rate of the signal below "
                 f"it: it differs by {self.size:.3g} from a finite difference of that signal "
                 f"(tolerance {self.expected:.3g})")
@@ -191,3 +205,26 @@ def _mismatch(lower: str, s: np.ndarray, d: np.ndarray, h: float) -> tuple[Any, 
     # Rounding of the difference itself: ~1e-16 |s| / h; 1e-9 leaves room.
     floor = RELATIVE_FLOOR * float(np.abs(d).max()) + 1e-9 * float(np.abs(s).max()) / h
     return error, MISMATCH_RATIO * second + floor
+
+
+def knot_jumps(sample: Callable[[np.ndarray], ReferenceSample], knots: np.ndarray,
+               step: float = KNOT_STEP) -> list[Discontinuity]:
+    """Every signal of :data:`CHAINS` (x_d to its 4th derivative, the task to its 2nd, b1d
+    to its 2nd) whose one-sided limits at a knot differ, earliest first: each limit
+    extrapolated linearly from the samples at ``step`` and 2 ``step`` on its side,
+    2 s(t -+ h) - s(t -+ 2h). A difference above :data:`KNOT_TOLERANCE` (1 + |s|) that
+    stays above half its size at step / 10 is a jump (a continuous signal's shrinks about
+    100-fold, the extrapolation's error being O(h^2))."""
+    found = []
+    for t in np.asarray(knots, dtype=float):
+        gaps = []
+        for h in (step, step / 10):
+            values = signals(sample(t + h * np.array([-2.0, -1.0, 1.0, 2.0])))
+            gaps.append({name: (float(np.linalg.norm((2 * v[2] - v[3]) - (2 * v[1] - v[0]))),
+                                float(np.abs(v).max(initial=0.0)))
+                         for name, v in values.items() if v.shape[1]})
+        for name, (gap, size) in gaps[0].items():
+            if gap > KNOT_TOLERANCE * (1.0 + size) and gaps[1][name][0] > 0.5 * gap:
+                found.append(Discontinuity(float(t), name, "knot", gaps[1][name][0],
+                                           KNOT_TOLERANCE * (1.0 + size)))
+    return found

@@ -4,10 +4,11 @@ A segment from t_i to t_{i+1} (length T) that matches the values and the first m
 derivatives at both ends is the unique polynomial of degree 2m - 1 in tau = (t - t_i) / T.
 Neighbouring segments share their end derivatives, so the whole curve is C^(m-1): the
 waypoints kind uses m = 5 (degree 9, C^4: the CoM's snap is continuous, as the attitude
-feed-forward (13)-(16) needs) with the acceleration, jerk and snap zero at each waypoint, and
-m = 3 (degree 5, C^2) for the orientation's rotation vector. Local (a waypoint moves only its
-two segments), exact at the waypoints, and with zero end velocities each segment is a
-monotone blend (no overshoot between rest points).
+feed-forward (13)-(16) needs) with the acceleration, jerk and snap zero at each waypoint
+(``mode: stop``) or chosen by :mod:`.through` (``mode: through``), and m = 3 (degree 5, C^2)
+for the orientation's rotation vector. Local (a waypoint moves only its two segments), exact
+at the waypoints, and with zero end velocities each segment is a monotone blend (no overshoot
+between rest points).
 
 Pure numpy; the evaluation is one small matrix product per call.
 """

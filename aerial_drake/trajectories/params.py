@@ -26,35 +26,18 @@ import dataclasses
 import math
 import typing
 
-import numpy as np
-
 from aerial_drake.trajectories.orientation import EeOrientation, orientation_errors
+from aerial_drake.trajectories.waypoint_checks import (
+    COM_RULES,
+    HEADING_RULES,
+    WAYPOINT_MODES,
+    is_finite_number,
+    vector_error,
+    waypoints_errors,
+)
 
 __all__ = ["TrajectoryParams", "HoverParams", "Waypoint", "WaypointsParams",
-           "PythonParams", "ComPlanningParams", "COM_RULES", "HEADING_RULES"]
-
-#: How the waypoints kind finds the CoM: rule (33) from the end-effector path, or its own
-#: waypoints.
-COM_RULES = ("offset", "waypoints")
-#: How the waypoints kind finds the heading.
-HEADING_RULES = ("constant", "given", "along_path")
-
-
-def _is_finite_number(x) -> bool:
-    return (isinstance(x, (int, float, np.floating, np.integer)) and not isinstance(x, bool)
-            and math.isfinite(x))
-
-
-def _vector_error(name: str, value, size: int, meaning: str) -> str | None:
-    try:
-        length = len(value)
-    except TypeError:
-        length = None
-    if length != size:
-        return f"'{name}' must be a list of {size} floats {meaning}, got {value!r}"
-    if not all(_is_finite_number(x) for x in value):
-        return f"'{name}' must hold finite numbers ({meaning}), got {value!r}"
-    return None
+           "PythonParams", "ComPlanningParams", "COM_RULES", "HEADING_RULES", "WAYPOINT_MODES"]
 
 
 @dataclasses.dataclass
@@ -79,12 +62,12 @@ class HoverParams:
     def errors(self, n_joints: int | None = None, prefix: str = "hover.") -> list[str]:
         """What is wrong with the section (``n_joints``: unused, the kinds' common
         signature)."""
-        found = [_vector_error(prefix + "ee_position", self.ee_position, 3, "[x, y, z] in m"),
-                 _vector_error(prefix + "ee_rpy", self.ee_rpy, 3, "[a, b, c] in rad")]
+        found = [vector_error(prefix + "ee_position", self.ee_position, 3, "[x, y, z] in m"),
+                 vector_error(prefix + "ee_rpy", self.ee_rpy, 3, "[a, b, c] in rad")]
         found += orientation_errors(prefix, self.ee_rpy, self.ee_orientation)
         if self.com:
-            found.append(_vector_error(prefix + "com", self.com, 3, "[x, y, z] in m"))
-        if not _is_finite_number(self.heading):
+            found.append(vector_error(prefix + "com", self.com, 3, "[x, y, z] in m"))
+        if not is_finite_number(self.heading):
             found.append(f"'{prefix}heading' must be a finite angle (rad), got "
                          f"{self.heading!r}")
         return [e for e in found if e]
@@ -112,10 +95,21 @@ class Waypoint:
     com: typing.List[float] = dataclasses.field(default_factory=list)
     # The heading phi4 (rad): required with ``heading: given``, else .nan.
     heading: float = math.nan
-    # Velocity through the waypoint, World (m/s); empty: at rest there.
+    # Velocity through the waypoint, World (m/s); empty: at rest there (mode: stop), or
+    # chosen (mode: through).
     ee_velocity: typing.List[float] = dataclasses.field(default_factory=list)
-    # Angular velocity of the end effector through the waypoint, World (rad/s); empty: 0.
+    # Angular velocity of the end effector through the waypoint, World (rad/s); empty: 0
+    # (mode: stop), or chosen (mode: through).
     ee_angular_velocity: typing.List[float] = dataclasses.field(default_factory=list)
+    # The CoM's velocity through the waypoint, World (m/s), only with ``com: waypoints``;
+    # empty: at rest (mode: stop), or chosen (mode: through).
+    com_velocity: typing.List[float] = dataclasses.field(default_factory=list)
+    # The heading's rate through the waypoint (rad/s), only with ``heading: given``; .nan:
+    # at rest (mode: stop), or chosen (mode: through).
+    heading_rate: float = math.nan
+    # The task joint components' rates through the waypoint (rad/s), only with ``joints``;
+    # empty: at rest (mode: stop), or chosen (mode: through).
+    joint_velocities: typing.List[float] = dataclasses.field(default_factory=list)
 
 
 @dataclasses.dataclass
@@ -131,70 +125,17 @@ class WaypointsParams:
     heading: str = "constant"
     # The heading of ``heading: constant`` (rad).
     heading_angle: float = 0.0
+    # "stop": at each waypoint every velocity not given is zero, and the acceleration, jerk
+    # and snap are zero; "through": at the interior waypoints the velocities not given and
+    # every acceleration, jerk and snap are chosen (least snap) so the path passes through
+    # without stopping (aerial_drake.trajectories.through; docs/trajectories.md).
+    mode: str = "stop"
 
     def errors(self, n_joints: int | None = None, prefix: str = "waypoints.") -> list[str]:
         """What is wrong with the section; ``n_joints``: the task's joint components (each
-        waypoint's ``joints`` has as many), None: not checked."""
-        found: list[str | None] = []
-        if self.com not in COM_RULES:
-            found.append(f"'{prefix}com' must be one of {COM_RULES}, got {self.com!r}")
-        if self.heading not in HEADING_RULES:
-            found.append(f"'{prefix}heading' must be one of {HEADING_RULES}, got "
-                         f"{self.heading!r}")
-        if not _is_finite_number(self.heading_angle):
-            found.append(f"'{prefix}heading_angle' must be a finite angle (rad), got "
-                         f"{self.heading_angle!r}")
-        if len(self.points) < 2:
-            found.append(f"'{prefix}points' needs at least two waypoints, got "
-                         f"{len(self.points)}: for a constant reference use kind: hover")
-        previous = -math.inf
-        for i, w in enumerate(self.points):
-            where = f"{prefix}points[{i}]."
-            if not _is_finite_number(w.time) or w.time < 0:
-                found.append(f"'{where}time' must be a finite time >= 0 (s), got {w.time!r}")
-            elif not w.time > previous:
-                found.append(f"'{where}time' = {w.time!r} must be later than the waypoint "
-                             f"before ({previous!r} s): list waypoints in time order")
-            else:
-                previous = w.time
-            found.append(_vector_error(where + "ee_position", w.ee_position, 3,
-                                       "[x, y, z] in m"))
-            found.append(_vector_error(where + "ee_rpy", w.ee_rpy, 3, "[a, b, c] in rad"))
-            found += orientation_errors(where, w.ee_rpy, w.ee_orientation)
-            if w.joints and n_joints is not None:
-                found.append(_vector_error(where + "joints", w.joints, n_joints,
-                                           "one angle per joint component of the task (rad)"))
-            elif w.joints and not all(_is_finite_number(x) for x in w.joints):
-                found.append(f"'{where}joints' must hold finite angles (rad), got {w.joints!r}")
-            if self.com == "waypoints":
-                found.append(_vector_error(where + "com", w.com, 3, "[x, y, z] in m (com: "
-                                           "waypoints needs it at every waypoint)"))
-            elif w.com:
-                found.append(f"'{where}com' is set but the CoM follows rule (33) (com: "
-                             "offset): set com: waypoints, or remove it")
-            if self.heading == "given" and not _is_finite_number(w.heading):
-                found.append(f"'{where}heading' must be a finite angle (rad) with heading: "
-                             f"given, got {w.heading!r}")
-            elif self.heading != "given" and not math.isnan(w.heading):
-                found.append(f"'{where}heading' is set but heading is "
-                             f"'{self.heading}': set heading: given, or remove it")
-            for name in ("ee_velocity", "ee_angular_velocity"):
-                value = getattr(w, name)
-                if value:
-                    found.append(_vector_error(where + name, value, 3, "World, per s"))
-        if self.points and any(
-                w.joints for w in self.points) and not all(w.joints for w in self.points):
-            found.append(f"'{prefix}points[*].joints' is set at some waypoints only: give it "
-                         "at every waypoint, or at none (joint_targets holds them)")
-        for end in (0, len(self.points) - 1) if self.points else ():
-            w = self.points[end]
-            for name in ("ee_velocity", "ee_angular_velocity"):
-                value = getattr(w, name)
-                if value and _vector_error("", value, 3, "") is None and any(value):
-                    found.append(f"'{prefix}points[{end}].{name}' = {value!r} must be zero: the "
-                                 "reference holds still before the first and after the last "
-                                 "waypoint, so a velocity there would jump")
-        return [e for e in found if e]
+        waypoint's ``joints`` has as many), None: not checked
+        (:func:`~aerial_drake.trajectories.waypoint_checks.waypoints_errors`)."""
+        return waypoints_errors(self, n_joints, prefix)
 
 
 @dataclasses.dataclass
@@ -238,7 +179,7 @@ class ComPlanningParams:
             found.append(f"'{prefix}enabled' must be true or false, got {self.enabled!r}")
         for name, low, high in (("sample_period", 0.005, 1.0), ("knot_period", 0.05, 5.0)):
             value = getattr(self, name)
-            if not _is_finite_number(value) or not low <= value <= high:
+            if not is_finite_number(value) or not low <= value <= high:
                 found.append(f"'{prefix}{name}' must be a time in [{low:g}, {high:g}] s, got "
                              f"{value!r}")
         if not found and self.knot_period < 2 * self.sample_period:
@@ -316,7 +257,7 @@ class TrajectoryParams:
                     "give exactly three entries"
                 )
                 continue
-            if not all(_is_finite_number(x) for x in value):
+            if not all(is_finite_number(x) for x in value):
                 errors.append(f"'{name}' must hold finite numbers, got {value!r}")
             elif name == "orientation_amplitudes" and any(x < 0 for x in value):
                 errors.append(
@@ -334,13 +275,13 @@ class TrajectoryParams:
             "heading_rate",
         ):
             value = getattr(self, name)
-            if not _is_finite_number(value):
+            if not is_finite_number(value):
                 errors.append(f"'{name}' must be a finite float, got {value!r}")
             elif name.endswith(("_amplitude", "_frequency")) and value < 0:
                 errors.append(f"'{name}' must be >= 0, got {value!r}: use its magnitude")
         targets = self.joint_targets
         if not isinstance(targets, (list, tuple)) or not all(
-                _is_finite_number(x) for x in targets):
+                is_finite_number(x) for x in targets):
             errors.append(f"'joint_targets' must hold finite angles (rad), got "
                           f"{self.joint_targets!r}")
         errors += self.com_planning.errors()

@@ -1,24 +1,33 @@
 """``kind: waypoints``: end-effector poses (and task joint angles) at given times, made smooth
 enough for the law (docs/trajectories.md).
 
-Constructions (all local: a waypoint changes only its two segments):
+Constructions (``mode: stop``, the default: all local, a waypoint changes only its two
+segments):
 
 - end-effector position, CoM waypoints, heading angle and joint components: piecewise
   degree-9 Hermite polynomials (:mod:`.hermite`), matching at each waypoint the value, the
-  given velocity (zero: rest to rest) and zero acceleration, jerk and snap. So every one is C^4
+  given velocity (``ee_velocity``, ``com_velocity``, ``heading_rate``, ``joint_velocities``;
+  zero if not given: rest to rest) and zero acceleration, jerk and snap. So every one is C^4
   (the law needs x_d in C^4 for the attitude feed-forward (13)-(16), the task in C^2 (17)-(20)).
 - the system's CoM (x_g of (3)) with ``com: offset``: the paper's rule (33),
   x_d = p_ed + R3(phi4) r_o, the end effector's path at the fixed offset r_o
   (``trajectory.com_offset``) rotated with the heading: C^4 because both terms are.
 - orientation: on each segment R(t) = R_i exp(hat(r(t))) with r(t) a quintic in the tangent
   space at R_i (:mod:`.so3`) from r = 0 to log(R_i^T R_{i+1}), matching the waypoints' angular
-  velocities (zero: rest) and zero angular acceleration at both ends. The angular velocity
+  velocities (zero: rest) and angular accelerations (zero) at both ends. The angular velocity
   w = R J_r(r) r' and acceleration are continuous across waypoints (C^2 on SO(3)), unlike
   slerp's, whose angular velocity jumps at each waypoint.
 - heading: ``constant`` (heading_angle), ``given`` (each waypoint's, interpolated as numbers:
   write 3.3 rather than -2.98 to turn the short way from 3.0), or ``along_path`` (each waypoint
   faces the horizontal direction to the next one, the last keeps the one before; a waypoint
   less than 1 cm from the next horizontally keeps the previous heading), then unwrapped.
+
+``mode: through``: the same segments, but at the interior waypoints every velocity not given,
+and every acceleration, jerk and snap, is chosen so the path passes through without stopping
+(:mod:`.through`: the least-snap C^4 curve through the waypoints; for the orientation the
+angular velocity and acceleration of that curve through the neighbours' rotation vectors).
+Still C^4 and C^2 on SO(3), exactly: continuity does not depend on the knot derivatives' values,
+only on both segments at a knot sharing them. A constant heading stays constant.
 
 Before the first waypoint and after the last the reference holds still (so their velocities
 must be zero, which :class:`~aerial_drake.trajectories.params.WaypointsParams` checks).
@@ -48,6 +57,7 @@ from aerial_drake.trajectories.so3 import (
     rotation_vector_rates,
     rotation_vector_velocity,
 )
+from aerial_drake.trajectories.through import knot_rotation_rates, through_derivatives
 
 __all__ = ["WaypointsReference", "paper_angles_rotation", "MAX_SEGMENT_ROTATION"]
 
@@ -83,25 +93,50 @@ class WaypointsReference(ReferenceSource):
         points = params.points
         super().__init__(len(joint_targets))
         self.times = np.array([w.time for w in points], dtype=float)
+        self.mode = params.mode
         positions = np.array([w.ee_position for w in points], dtype=float)
-        velocities = np.array([w.ee_velocity or [0.0, 0.0, 0.0] for w in points], dtype=float)
-        self._position = PiecewiseHermite.from_waypoints(
-            self.times, _rest_to_rest(positions, velocities))
-        self._heading = PiecewiseHermite.from_waypoints(
-            self.times, _rest_to_rest(self._headings(params, positions)))
+        if self.mode == "stop":  # today's construction, number for number
+            velocities = np.array([w.ee_velocity or [0.0, 0.0, 0.0] for w in points],
+                                  dtype=float)
+            self._position = PiecewiseHermite.from_waypoints(
+                self.times, _rest_to_rest(positions, velocities))
+        else:
+            self._position = self._curve(positions, [w.ee_velocity for w in points])
+        headings = self._headings(params, positions)
+        if params.heading == "given":
+            rates = [[] if math.isnan(w.heading_rate) else [w.heading_rate] for w in points]
+            self._heading = self._curve(headings, rates)
+        elif params.heading == "along_path" and self.mode == "through":
+            self._heading = self._curve(headings, [[] for _ in points])
+        else:
+            self._heading = PiecewiseHermite.from_waypoints(self.times, _rest_to_rest(headings))
         self._com = None
         if params.com == "waypoints":
-            self._com = PiecewiseHermite.from_waypoints(
-                self.times, _rest_to_rest(np.array([w.com for w in points], dtype=float)))
+            self._com = self._curve(np.array([w.com for w in points], dtype=float),
+                                    [w.com_velocity for w in points])
         self._com_offset = np.asarray(com_offset, dtype=float)
         self._joints = None
         self._joint_targets = np.asarray(joint_targets, dtype=float)
         if points[0].joints:
-            self._joints = PiecewiseHermite.from_waypoints(
-                self.times, _rest_to_rest(np.array([w.joints for w in points], dtype=float)))
+            self._joints = self._curve(np.array([w.joints for w in points], dtype=float),
+                                       [w.joint_velocities for w in points])
         self._bases, self._orientation = self._orientation_segments(points)
         self._at = TaskReferenceLayout.of(self.n_joints)
         self._task_end = COM_REFERENCE_SIZE + task_reference_size(self.n_joints)
+
+    def _curve(self, values: np.ndarray, given: list) -> PiecewiseHermite:
+        """The C^4 curve through ``values`` (N, C) with each waypoint's given velocity (an
+        empty entry: not given): at rest where not given (``mode: stop``), or passing
+        through (``mode: through``, :func:`.through.through_derivatives`)."""
+        values = np.asarray(values, dtype=float).reshape(len(given), -1)
+        if self.mode == "stop":
+            rates = np.array([v if len(v) else np.zeros(values.shape[1]) for v in given],
+                             dtype=float)
+            return PiecewiseHermite.from_waypoints(self.times, _rest_to_rest(values, rates))
+        rates = np.array([v if len(v) else np.full(values.shape[1], np.nan) for v in given],
+                         dtype=float)
+        return PiecewiseHermite.from_waypoints(
+            self.times, through_derivatives(self.times, values, rates))
 
     @staticmethod
     def _headings(params: WaypointsParams, positions: np.ndarray) -> np.ndarray:
@@ -128,9 +163,14 @@ class WaypointsReference(ReferenceSource):
         rotations = [end_effector_rotation(w.ee_rpy, w.ee_orientation) for w in points]
         omegas = [np.asarray(w.ee_angular_velocity or [0.0, 0.0, 0.0], dtype=float)
                   for w in points]
+        zero = np.zeros(3)
+        alphas = [zero] * len(points)  # World angular accelerations at the waypoints
+        if self.mode == "through":
+            given = [w.ee_angular_velocity or None for w in points]
+            omega_array, alpha_array = knot_rotation_rates(self.times, rotations, given)
+            omegas, alphas = list(omega_array), list(alpha_array)
         coefficients = []
         fixed_axis: list[bool] = []
-        zero = np.zeros(3)
         for i in range(len(points) - 1):
             r_end = log_so3(rotations[i].T @ rotations[i + 1])
             angle = float(np.linalg.norm(r_end))
@@ -142,16 +182,20 @@ class WaypointsReference(ReferenceSource):
                     " deg where the shortest way is ambiguous: insert a waypoint between them")
             # Body angular velocities: R^T w (the rotation vector lives in R_i's tangent space).
             start_rate = rotations[i].T @ omegas[i]
+            start_acceleration = zero if self.mode == "stop" else rotation_vector_acceleration(
+                zero, start_rate, rotations[i].T @ alphas[i])
             end_rate = rotation_vector_velocity(r_end, rotations[i + 1].T @ omegas[i + 1])
-            end_acceleration = rotation_vector_acceleration(r_end, end_rate, zero)
+            end_domega = zero if self.mode == "stop" else rotations[i + 1].T @ alphas[i + 1]
+            end_acceleration = rotation_vector_acceleration(r_end, end_rate, end_domega)
             # A segment at rest at both ends turns about the fixed axis of r_end (every
             # coefficient of its r(tau) is parallel to r_end): then J_r(r) r' = r' and
             # R = R_i exp(hat(r)) is Rodrigues' formula on that axis, done in fill() without
             # the general rates (the same numbers, about a tenth of the cost).
-            fixed_axis.append(not np.any(omegas[i]) and not np.any(omegas[i + 1]))
+            fixed_axis.append(not np.any(omegas[i]) and not np.any(omegas[i + 1])
+                              and not np.any(alphas[i]) and not np.any(alphas[i + 1]))
             coefficients.append(hermite_segment(
                 points[i + 1].time - points[i].time,
-                np.array([zero, start_rate, zero]),
+                np.array([zero, start_rate, start_acceleration]),
                 np.array([r_end, end_rate, end_acceleration])))
         # Per fixed-axis segment: u, R_i u, R_i hat(u), R_i hat(u)^2 (u = 0 for a segment
         # that does not turn); the angle is theta = u . r.
