@@ -2,8 +2,10 @@
 ``robot init`` (:func:`init_robot`: the vehicle, the arm and the end effector found, a nominal
 posture, the CoM offset, the locked inertia, input limits and gains, written as a robot
 description and a hover scenario) and ``robot check`` (:func:`check_robot`: the margins at the
-nominal posture)."""
+nominal posture, :func:`format_check` its text, :class:`RobotCheck` the report)."""
 
+from aerial_drake.analysis.onboarding.check import RobotCheck, check_robot
+from aerial_drake.analysis.onboarding.check_text import format_check
 from aerial_drake.analysis.onboarding.errors import OnboardingError
 
-__all__ = ["OnboardingError"]
+__all__ = ["OnboardingError", "RobotCheck", "check_robot", "format_check"]

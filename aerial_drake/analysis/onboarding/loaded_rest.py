@@ -1,0 +1,196 @@
+"""The closed loop at rest under a constant load, and the limits it must keep there.
+
+A push ``F`` (World, N) on the vehicle is the generalized force ``[0; F; 0]`` in the plant's
+velocities ``[w_WB; v_WBo; qdot_arm]`` (the run applies it so, at the vehicle frame's
+origin: :func:`aerial_drake.simulation.actuators.free_body_wrench_map`); a wrench at the end
+effector is ``J_E^T w``. The equilibrium under either is the zero of (1) at rest under the
+paper's law (:func:`aerial_drake.analysis.wrench_deflection.external_force_equilibrium`).
+Under the law the CoM settles at ``x_d + F / K_x`` ((10) at rest: ``K_x e_x`` balances the
+push) while the task loop holds the end effector (decoupling): the arm absorbs the CoM's
+deflection, and so a push is limited by the arm's workspace as much as by the inputs.
+
+At an equilibrium :meth:`RestLoop.limits_at` checks what a run would stop on or clip:
+Assumption 1 (``sigma_min(J_3)`` above the scenario's ``sigma_min_J3_limit``), the arm's joint
+position limits (a run stops there by default, ``joint_limits.positions: stop``), the joint
+efforts, the thrust range and the body torque bounds (the applied command's saturation,
+:func:`aerial_drake.control.limits.command_limits`), and Assumption 2 (``|f_d|`` above
+``f_d_limit``), and one a run does not stop on: the end effector held within
+:data:`EE_HOLD_FRACTION` of the workspace radius of its target.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from aerial_drake.analysis.onboarding.check_subject import CheckSubject
+from aerial_drake.analysis.wrench_deflection import ExternalForce, external_force_equilibrium
+from aerial_drake.control.controller import make_controller
+from aerial_drake.control.law import AssumptionViolation, diagnostics_slices
+from aerial_drake.control.limits import command_limits
+from aerial_drake.dynamics.decoupling import DecoupledDynamics
+from aerial_drake.dynamics.equilibrium import kinematic_J3
+
+#: The end effector counts as held while its position is within this fraction of the
+#: description's ``workspace_radius`` of its target: near a singularity of J_3 the task's
+#: inertia Lambda_z grows and the law lets the end effector go long before sigma_min(J_3)
+#: reaches the Assumption-1 limit (a run does not stop on it; the check does).
+EE_HOLD_FRACTION = 0.25
+#: What a failed equilibrium solve reports as its binding limit.
+NO_EQUILIBRIUM = "no equilibrium (Newton's method did not converge)"
+
+
+@dataclass(frozen=True)
+class RestState:
+    """The loop at rest at positions ``q``: the law's command and how much of each limit it
+    uses (``usage[name]``: 1 at the limit, above 1 past it)."""
+
+    q: np.ndarray
+    command: np.ndarray  # [f, mu (3), tau (n)] (N, N m)
+    sigma_min: float  # sigma_min(J_3)
+    usage: dict[str, float]  # limit name -> fraction used (module docstring's limits)
+    violated: tuple[str, ...]  # each limit violated, named with its value; () when none
+
+    @property
+    def ok(self) -> bool:
+        return not self.violated
+
+    @property
+    def nearest(self) -> tuple[str, float]:
+        """The limit most used and its fraction."""
+        name = max(self.usage, key=lambda k: self.usage[k])
+        return name, self.usage[name]
+
+
+class RestLoop:
+    """The paper's law on the subject's model, held at rest under constant loads."""
+
+    def __init__(self, subject: CheckSubject) -> None:
+        self.subject = subject
+        model = subject.model
+        plant = model.plant
+        if plant.num_positions() != plant.num_velocities() + 1:
+            raise ValueError("robot check needs a quaternion floating base")
+        s = subject.scenario
+        self.sigma_limit = float(s.sigma_min_J3_limit)
+        self.f_d_limit = float(s.f_d_limit)
+        # Thresholds at 0: the law must not stop inside a Newton solve; the limits are
+        # checked at the solution (limits_at).
+        self.controller = make_controller(model, s.gains, sigma_min_J3_limit=0.0,
+                                          f_d_limit=0.0)
+        self.lower, self.upper = command_limits(s.actuation, model)
+        self.q_lower, self.q_upper = model.arm_position_limits()
+        self.joint_names = [j.name() for j in model.arm_joints]
+        self.ee_hold = EE_HOLD_FRACTION * float(model.description.workspace_radius)
+        self.dynamics = DecoupledDynamics(plant, model.base_body)
+        self.context = plant.CreateDefaultContext()
+        self.zero_v = np.zeros(plant.num_velocities())
+        self._f_d_at = diagnostics_slices(model.n)["f_d_norm"].start
+
+    # --- Loads ---------------------------------------------------------------------------
+    def vehicle_push(self, start: np.ndarray, end: np.ndarray) -> ExternalForce:
+        """A force on the vehicle (World, N) growing from ``start`` to ``end``."""
+        start, end = np.asarray(start, float), np.asarray(end, float)
+
+        def external(dynamics, d, fraction: float) -> np.ndarray:
+            G = np.zeros(self.zero_v.size)
+            G[3:6] = start + fraction * (end - start)  # [w_WB; v_WBo] rows: the force
+            return G
+        return external
+
+    def ee_wrench(self, start: np.ndarray, end: np.ndarray) -> ExternalForce:
+        """A wrench ``[force; torque]`` (World, N and N m) at the end-effector point, growing
+        from ``start`` to ``end``."""
+        start, end = np.asarray(start, float), np.asarray(end, float)
+        frame = self.subject.model.end_effector_frame
+
+        def external(dynamics, d, fraction: float) -> np.ndarray:
+            J6, _ = dynamics.frame_jacobian(d, frame)  # rows [v_E; w_E]
+            return J6.T @ (start + fraction * (end - start))
+        return external
+
+    # --- Equilibria ----------------------------------------------------------------------
+    def equilibrium(self, external: ExternalForce, q_start: np.ndarray
+                    ) -> tuple[np.ndarray | None, str]:
+        """The rest positions under ``external`` followed from ``q_start`` (the equilibrium
+        at the load's start): in 1 step, else 4; ``(None, why)`` when neither converges."""
+        why = NO_EQUILIBRIUM
+        for steps in (1, 4):
+            try:
+                q = external_force_equilibrium(
+                    self.subject.model, self.subject.scenario.gains, self.subject.references,
+                    external, q_start, steps=steps, tolerance=1e-8, max_iterations=25,
+                    controller=self.controller)
+            except (RuntimeError, np.linalg.LinAlgError, AssumptionViolation,
+                    FloatingPointError) as err:
+                why = f"{NO_EQUILIBRIUM}: {str(err).split(':', 1)[0]}" \
+                    if isinstance(err, AssumptionViolation) else NO_EQUILIBRIUM
+                continue
+            if np.all(np.isfinite(q)):
+                return q, ""
+        return None, why
+
+    def limits_at(self, q: np.ndarray) -> RestState:
+        """The command at rest at ``q`` and how much of every limit of the module docstring
+        it uses; the violated ones listed Assumption 1 and the joint limits first (a run
+        stops on them; the inputs are clipped). Usage: ``sigma_min_J3_limit / sigma_min``,
+        a joint's distance from the middle of its range over the half range, an input over
+        its bound on its side, ``f_d_limit / |f_d|``."""
+        plant, model = self.subject.model.plant, self.subject.model
+        x = np.concatenate([q, self.zero_v])
+        out = self.controller.solve(x, *self.subject.references)
+        command = np.concatenate([[float(out.f)], out.mu, out.tau])
+        plant.SetPositions(self.context, q)
+        J3 = kinematic_J3(model, self.context)
+        sigma = float(np.linalg.svd(J3, compute_uv=False)[-1])
+        usage: dict[str, float] = {}
+        violated = []
+        usage["Assumption 1"] = self.sigma_limit / sigma if sigma > 0 else np.inf
+        if not sigma > self.sigma_limit:
+            violated.append(f"Assumption 1: sigma_min(J_3) = {sigma:.3g} at the limit "
+                            f"{self.sigma_limit:g}")
+        q_arm = q[model.arm_position_indices]
+        for name, value, low, high in zip(self.joint_names, q_arm, self.q_lower,
+                                          self.q_upper):
+            half = 0.5 * (high - low)
+            usage[f"joint '{name}' position"] = (
+                abs(value - 0.5 * (high + low)) / half if np.isfinite(half) and half > 0
+                else 0.0)
+            if not low <= value <= high:
+                violated.append(f"joint '{name}' position {value:.3f} rad outside "
+                                f"[{low:.3f}, {high:.3f}]")
+        f_d = float(out.diagnostics[self._f_d_at])
+        usage["Assumption 2"] = self.f_d_limit / f_d if f_d > 0 else np.inf
+        if not f_d > self.f_d_limit:
+            violated.append(f"Assumption 2: |f_d| = {f_d:.3g} N at the limit "
+                            f"{self.f_d_limit:g} N")
+        names = ["thrust"] + [f"body torque about b{i + 1}" for i in range(3)] + [
+            f"joint '{n}' effort" for n in self.joint_names]
+        units = ["N"] + ["N m"] * (3 + len(self.joint_names))
+        for name, unit, value, low, high in zip(names, units, command, self.lower,
+                                                self.upper):
+            bound = high if value >= 0 else low
+            usage[name] = value / bound if np.isfinite(bound) and bound != 0 else 0.0
+            if name == "thrust":  # its range need not hold 0: the side it is nearest
+                usage[name] = max(value / high if np.isfinite(high) and high > 0 else 0.0,
+                                  low / value if value > 0 and low > 0 else 0.0)
+            if not low <= value <= high:
+                bound = high if value > high else low
+                violated.append(f"{name} {value:.3g} {unit} past its limit {bound:.3g} {unit}")
+        ee_error = float(np.linalg.norm(
+            model.end_effector_frame.CalcPoseInWorld(self.context).translation()
+            - self.subject.hover.p_ed))
+        usage["end-effector hold"] = ee_error / self.ee_hold
+        if not ee_error <= self.ee_hold:
+            violated.append(f"end-effector hold: {1000 * ee_error:.3g} mm from its target, "
+                            f"past {1000 * self.ee_hold:.3g} mm")
+        return RestState(q=q, command=command, sigma_min=sigma, usage=usage,
+                         violated=tuple(violated))
+
+    def com_and_ee(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The system CoM and the end-effector point (World, m) at ``q``."""
+        plant, model = self.subject.model.plant, self.subject.model
+        plant.SetPositions(self.context, q)
+        return (plant.CalcCenterOfMassPositionInWorld(self.context),
+                model.end_effector_frame.CalcPoseInWorld(self.context).translation())
