@@ -192,7 +192,8 @@ ExternalForce = Callable[[DecoupledDynamics, Any, float], np.ndarray]
 def external_force_equilibrium(model: AerialManipulator, gains: Gains, references: tuple,
                                external: ExternalForce, q_start: np.ndarray, *,
                                steps: int = 10, tolerance: float = 1e-10,
-                               max_iterations: int = 30, controller=None) -> np.ndarray:
+                               max_iterations: int = 30, controller=None,
+                               cache: dict | None = None) -> np.ndarray:
     """The positions at which the paper's law holds the robot at rest under a constant
     external generalized force ``G = external(dynamics, d, 1)`` (e.g. ``J_E^T w`` for an
     end-effector wrench, :func:`wrench_equilibrium`, or a force on the vehicle) and the
@@ -200,7 +201,9 @@ def external_force_equilibrium(model: AerialManipulator, gains: Gains, reference
     followed from ``q_start`` as the load grows in ``steps`` equal parts, each by Newton's
     method with a central finite-difference Jacobian. ``controller``: the law to hold it
     (default: :func:`~aerial_drake.control.controller.make_controller` on ``model`` and
-    ``gains``, with its default assumption thresholds). A quaternion base only.
+    ``gains``, with its default assumption thresholds). ``cache``: a dict kept between the
+    calls of a continuation, whose Newton steps then reuse the last Jacobian (chord steps,
+    refreshed when they converge slowly). A quaternion base only.
 
     Raises:
         RuntimeError: a Newton solve does not converge to ``tolerance`` (the step's norm) in
@@ -227,24 +230,43 @@ def external_force_equilibrium(model: AerialManipulator, gains: Gains, reference
 
     q = np.array(q_start, dtype=float)
     for fraction in np.arange(1, steps + 1) / steps:
-        q = _newton(residual, fraction, q, tolerance, max_iterations)
+        q = _newton(residual, fraction, q, tolerance, max_iterations, cache)
     return q
 
 
-def _newton(residual, w, q: np.ndarray, tolerance: float, max_iterations: int
-            ) -> np.ndarray:
+def _newton(residual, w, q: np.ndarray, tolerance: float, max_iterations: int,
+            cache: dict | None = None) -> np.ndarray:
     """A zero of ``residual(., w)`` (nv) over the positions, from ``q``, stepping by
-    :func:`_moved`."""
-    h = 1e-6
+    :func:`_moved`. With ``cache`` (a dict kept between the solves of a continuation), the
+    Jacobian of the last solve is reused (chord steps) and refreshed only when a step does
+    not shrink to half the last one; without it, a fresh Jacobian at every step."""
+    A = None if cache is None else cache.get("A")
+    previous = np.inf
     for _ in range(max_iterations):
         r = residual(q, w)
-        A = np.column_stack([(residual(_moved(q, h * e), w) - residual(_moved(q, -h * e), w))
-                             / (2.0 * h) for e in np.eye(r.size)])
+        fresh = A is None or cache is None
+        if fresh:
+            A = _jacobian(residual, w, q, r.size)
         step = -np.linalg.solve(A, r)
+        if not fresh and np.linalg.norm(step) > 0.5 * previous:  # stale: converging slowly
+            A = _jacobian(residual, w, q, r.size)
+            step = -np.linalg.solve(A, r)
         q = _moved(q, step)
-        if np.linalg.norm(step) < tolerance:
+        previous = float(np.linalg.norm(step))
+        if previous < tolerance:
+            if cache is not None:
+                cache["A"] = A
             return q
+    if cache is not None:
+        cache.pop("A", None)
     raise RuntimeError(f"wrench_equilibrium: no equilibrium found in {max_iterations} "
                        f"Newton steps (last step {np.linalg.norm(step):.3g}, residual "
                        f"{np.linalg.norm(r):.3g}): raise steps (smaller increments of the "
                        "wrench) or lower the wrench")
+
+
+def _jacobian(residual, w, q: np.ndarray, size: int) -> np.ndarray:
+    """d residual(., w) / d q along :func:`_moved`'s coordinates, central differences."""
+    h = 1e-6
+    return np.column_stack([(residual(_moved(q, h * e), w) - residual(_moved(q, -h * e), w))
+                            / (2.0 * h) for e in np.eye(size)])

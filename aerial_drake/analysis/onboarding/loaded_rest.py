@@ -14,8 +14,19 @@ Assumption 1 (``sigma_min(J_3)`` above the scenario's ``sigma_min_J3_limit``), t
 position limits (a run stops there by default, ``joint_limits.positions: stop``), the joint
 efforts, the thrust range and the body torque bounds (the applied command's saturation,
 :func:`aerial_drake.control.limits.command_limits`), and Assumption 2 (``|f_d|`` above
-``f_d_limit``), and one a run does not stop on: the end effector held within
-:data:`EE_HOLD_FRACTION` of the workspace radius of its target.
+``f_d_limit``), and two a run does not stop on: the task loop faster than the vehicle's
+(the slowest root of ``-Lambda_z^-1 K_z`` at the loaded posture faster than the slowest CoM or
+attitude root), and the end effector held within :data:`EE_HOLD_FRACTION` of the workspace
+radius of its target.
+
+The task-loop limit is what a slow push meets first near a singularity of J_3: Lambda_z
+grows along the direction J_3 loses, its task root slows towards 0, and the static
+equilibrium goes on, near-singular, with the end effector let go; but a task loop slower
+than the vehicle's motion no longer follows it, and a run's transient crosses the
+singularity (Assumption 1 stops it). On the test robot of tests/own_robot.py pushed along
++x the root is -1.35 1/s at 1.0 N and -0.51 1/s at 1.1 N against the vehicle's -1.26 1/s;
+runs ramped over 16 s survive 1.0 N and stop on Assumption 1 at 1.06 N (docs/robots.md,
+"robot check").
 """
 
 from __future__ import annotations
@@ -27,6 +38,7 @@ import numpy as np
 from aerial_drake.analysis.onboarding.check_subject import CheckSubject
 from aerial_drake.analysis.wrench_deflection import ExternalForce, external_force_equilibrium
 from aerial_drake.control.controller import make_controller
+from aerial_drake.control.gain_design import loop_roots
 from aerial_drake.control.law import AssumptionViolation, diagnostics_slices
 from aerial_drake.control.limits import command_limits
 from aerial_drake.dynamics.decoupling import DecoupledDynamics
@@ -37,6 +49,9 @@ from aerial_drake.dynamics.equilibrium import kinematic_J3
 #: inertia Lambda_z grows and the law lets the end effector go long before sigma_min(J_3)
 #: reaches the Assumption-1 limit (a run does not stop on it; the check does).
 EE_HOLD_FRACTION = 0.25
+#: The task loop's slowest root at a loaded posture must be this many times faster (in real
+#: part) than the vehicle's slowest (CoM or attitude) root (module docstring).
+TASK_SEPARATION = 3.0
 #: What a failed equilibrium solve reports as its binding limit.
 NO_EQUILIBRIUM = "no equilibrium (Newton's method did not converge)"
 
@@ -86,6 +101,11 @@ class RestLoop:
         self.dynamics = DecoupledDynamics(plant, model.base_body)
         self.context = plant.CreateDefaultContext()
         self.zero_v = np.zeros(plant.num_velocities())
+        g = s.gains
+        roots = loop_roots(subject.mass, g.K_x, g.D_x, g.k_R, g.k_w, g.Lambda2_bar)
+        self.vehicle_rate = abs(max(roots.slowest_com.real, roots.slowest_attitude.real))
+        self._K_z = np.diag(np.asarray(g.K_z, dtype=float))
+        self._jacobian: dict = {}  # the last Newton Jacobian, reused along a continuation
         self._f_d_at = diagnostics_slices(model.n)["f_d_norm"].start
 
     # --- Loads ---------------------------------------------------------------------------
@@ -121,7 +141,7 @@ class RestLoop:
                 q = external_force_equilibrium(
                     self.subject.model, self.subject.scenario.gains, self.subject.references,
                     external, q_start, steps=steps, tolerance=1e-8, max_iterations=25,
-                    controller=self.controller)
+                    controller=self.controller, cache=self._jacobian)
             except (RuntimeError, np.linalg.LinAlgError, AssumptionViolation,
                     FloatingPointError) as err:
                 why = f"{NO_EQUILIBRIUM}: {str(err).split(':', 1)[0]}" \
@@ -178,6 +198,14 @@ class RestLoop:
             if not low <= value <= high:
                 bound = high if value > high else low
                 violated.append(f"{name} {value:.3g} {unit} past its limit {bound:.3g} {unit}")
+        modes = np.linalg.eigvals(-np.linalg.solve(out.Lambda_z, self._K_z))
+        task_rate = float(np.min(np.abs(modes.real)))
+        need = TASK_SEPARATION * self.vehicle_rate
+        usage["task loop speed"] = need / task_rate if task_rate > 0 else np.inf
+        if not task_rate > need:
+            violated.append(f"task loop speed: its slowest root, {-task_rate:.3g} 1/s, is "
+                            f"not {TASK_SEPARATION:g}x the vehicle's slowest, "
+                            f"{-self.vehicle_rate:.3g} 1/s")
         ee_error = float(np.linalg.norm(
             model.end_effector_frame.CalcPoseInWorld(self.context).translation()
             - self.subject.hover.p_ed))
