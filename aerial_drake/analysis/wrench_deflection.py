@@ -141,7 +141,7 @@ def amplification_along_reference(reference: ReferenceSource, model: AerialManip
     return np.array(out)
 
 
-def _moved(q: np.ndarray, delta: np.ndarray) -> np.ndarray:
+def moved_positions(q: np.ndarray, delta: np.ndarray) -> np.ndarray:
     """``q`` (quaternion base) moved by ``delta = [rotation vector (World); position;
     joints]``, a step along the generalized velocity's coordinates."""
     theta = float(np.linalg.norm(delta[:3]))
@@ -237,9 +237,10 @@ def external_force_equilibrium(model: AerialManipulator, gains: Gains, reference
 def _newton(residual, w, q: np.ndarray, tolerance: float, max_iterations: int,
             cache: dict | None = None) -> np.ndarray:
     """A zero of ``residual(., w)`` (nv) over the positions, from ``q``, stepping by
-    :func:`_moved`. With ``cache`` (a dict kept between the solves of a continuation), the
-    Jacobian of the last solve is reused (chord steps) and refreshed only when a step does
-    not shrink to half the last one; without it, a fresh Jacobian at every step."""
+    :func:`moved_positions`. With ``cache`` (a dict kept between the solves of a
+    continuation), the Jacobian of the last solve is reused (chord steps) and refreshed only
+    when a step does not shrink to half the last one; without it, a fresh Jacobian at every
+    step."""
     A = None if cache is None else cache.get("A")
     previous = np.inf
     for _ in range(max_iterations):
@@ -251,7 +252,7 @@ def _newton(residual, w, q: np.ndarray, tolerance: float, max_iterations: int,
         if not fresh and np.linalg.norm(step) > 0.5 * previous:  # stale: converging slowly
             A = _jacobian(residual, w, q, r.size)
             step = -np.linalg.solve(A, r)
-        q = _moved(q, step)
+        q = moved_positions(q, step)
         previous = float(np.linalg.norm(step))
         if previous < tolerance:
             if cache is not None:
@@ -266,7 +267,8 @@ def _newton(residual, w, q: np.ndarray, tolerance: float, max_iterations: int,
 
 
 def _jacobian(residual, w, q: np.ndarray, size: int) -> np.ndarray:
-    """d residual(., w) / d q along :func:`_moved`'s coordinates, central differences."""
+    """d residual(., w) / d q along :func:`moved_positions`'s coordinates, central differences."""
     h = 1e-6
-    return np.column_stack([(residual(_moved(q, h * e), w) - residual(_moved(q, -h * e), w))
-                            / (2.0 * h) for e in np.eye(size)])
+    return np.column_stack([(residual(moved_positions(q, h * e), w)
+                             - residual(moved_positions(q, -h * e), w)) / (2.0 * h)
+                            for e in np.eye(size)])

@@ -17,7 +17,9 @@ efforts, the thrust range and the body torque bounds (the applied command's satu
 ``f_d_limit``), and two a run does not stop on: the task loop faster than the vehicle's
 (the slowest root of ``-Lambda_z^-1 K_z`` at the loaded posture :data:`TASK_SEPARATION` times
 faster than the slowest CoM or attitude root, or no slower than :data:`TASK_SLOWDOWN` of its
-rate at the nominal posture where that is slower already), and the end effector held within :data:`EE_HOLD_FRACTION` of the workspace
+rate at the nominal posture where that is slower already), and the equilibrium stable (the
+closed loop linearised there: :meth:`RestLoop.slowest_root`; a push can pass a bifurcation
+where the arm's equilibrium turns unstable: on the UR3e pushed up, at about 42 N), and the end effector held within :data:`EE_HOLD_FRACTION` of the workspace
 radius of its target.
 
 The task-loop limit is what a slow push meets first near a singularity of J_3: Lambda_z
@@ -37,7 +39,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from aerial_drake.analysis.onboarding.check_subject import CheckSubject
-from aerial_drake.analysis.wrench_deflection import ExternalForce, external_force_equilibrium
+from aerial_drake.analysis.wrench_deflection import (
+    ExternalForce,
+    external_force_equilibrium,
+    moved_positions,
+)
 from aerial_drake.control.controller import make_controller
 from aerial_drake.control.gain_design import loop_roots
 from aerial_drake.control.law import AssumptionViolation, diagnostics_slices
@@ -110,6 +116,7 @@ class RestLoop:
         self.vehicle_rate = abs(max(roots.slowest_com.real, roots.slowest_attitude.real))
         self._K_z = np.diag(np.asarray(g.K_z, dtype=float))
         self._jacobian: dict = {}
+        self.nominal_growth = self.slowest_root(subject.q0)
         self.task_rate_needed, self.task_rule = np.inf, ""  # set from the nominal posture
         nominal = self.task_rate(subject.q0)
         self.task_rate_needed = min(TASK_SEPARATION * self.vehicle_rate,
@@ -163,7 +170,7 @@ class RestLoop:
                 return q, ""
         return None, why
 
-    def limits_at(self, q: np.ndarray) -> RestState:
+    def limits_at(self, q: np.ndarray, external: ExternalForce | None = None) -> RestState:
         """The command at rest at ``q`` and how much of every limit of the module docstring
         it uses; the violated ones listed Assumption 1 and the joint limits first (a run
         stops on them; the inputs are clipped). Usage: ``sigma_min_J3_limit / sigma_min``,
@@ -216,6 +223,12 @@ class RestLoop:
         if not task_rate > need:
             violated.append(f"task loop speed: its slowest root, {-task_rate:.3g} 1/s, is "
                             f"slower than {-need:.3g} 1/s ({self.task_rule})")
+        growth = self.slowest_root(q, external)
+        usage["closed-loop stability"] = 1.0 - growth / self.nominal_growth \
+            if self.nominal_growth < 0 else 0.0
+        if not growth < 0.0:
+            violated.append(f"closed-loop stability: a root at {growth:.3g} 1/s (the "
+                            "equilibrium is unstable)")
         ee_error = float(np.linalg.norm(
             model.end_effector_frame.CalcPoseInWorld(self.context).translation()
             - self.subject.hover.p_ed))
@@ -235,6 +248,33 @@ class RestLoop:
         """The task loop's slowest rate (1/s) at rest at ``q``."""
         x = np.concatenate([q, self.zero_v])
         return self._task_rate(self.controller.solve(x, *self.subject.references).Lambda_z)
+
+    def slowest_root(self, q: np.ndarray, external: ExternalForce | None = None) -> float:
+        """The largest real part (1/s) of the closed loop's roots linearised at rest at ``q``
+        under the load ``external`` (its full value): ``[delta; v]' = [v; v_dot]`` with
+        ``delta`` the position offset along :func:`~aerial_drake.analysis.wrench_deflection.
+        moved_positions`' coordinates (at rest its rate is ``v``), ``v_dot`` from (1) under
+        the law's command, by central differences (continuous feedback, no saturation)."""
+        plant = self.subject.model.plant
+        nv = self.zero_v.size
+
+        def v_dot(delta: np.ndarray, v: np.ndarray) -> np.ndarray:
+            x = np.concatenate([moved_positions(q, delta), v])
+            out = self.controller.solve(x, *self.subject.references)
+            plant.SetPositionsAndVelocities(self.context, x)
+            d = self.dynamics.compute(self.context)
+            base = np.concatenate([[0.0, 0.0, float(out.f)], out.mu])
+            G = external(self.dynamics, d, 1.0) if external is not None else 0.0
+            return np.linalg.solve(d.M, d.J_b.T @ base + d.Q.T @ out.tau + G - d.g
+                                   - d.C @ v)  # (1)
+
+        h, zero = 1e-6, np.zeros(nv)
+        A = np.zeros((2 * nv, 2 * nv))
+        A[:nv, nv:] = np.eye(nv)
+        for i, e in enumerate(np.eye(nv)):
+            A[nv:, i] = (v_dot(h * e, zero) - v_dot(-h * e, zero)) / (2.0 * h)
+            A[nv:, nv + i] = (v_dot(zero, h * e) - v_dot(zero, -h * e)) / (2.0 * h)
+        return float(np.max(np.linalg.eigvals(A).real))
 
     def com_and_ee(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The system CoM and the end-effector point (World, m) at ``q``."""

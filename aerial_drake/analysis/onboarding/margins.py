@@ -79,10 +79,11 @@ def largest_load(loop: RestLoop, load: Callable[[np.ndarray, np.ndarray], Extern
     def attempt(size: float) -> tuple[RestState | None, str, float]:
         """The loop at rest under ``size`` from the last held equilibrium: its state (None
         past a limit) and the arm's largest joint move."""
-        q, why = loop.equilibrium(load(lo * unit_vector, size * unit_vector), q_lo)
+        external = load(lo * unit_vector, size * unit_vector)
+        q, why = loop.equilibrium(external, q_lo)
         if q is None:
             return None, why, np.inf
-        state = loop.limits_at(q)
+        state = loop.limits_at(q, external)
         moved = float(np.abs(q[arm] - q_lo[arm]).max())
         if not state.ok:
             return None, state.violated[0], moved
