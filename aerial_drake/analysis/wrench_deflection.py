@@ -246,7 +246,7 @@ def _newton(residual, w, q: np.ndarray, tolerance: float, max_iterations: int,
     for _ in range(max_iterations):
         r = residual(q, w)
         fresh = A is None or cache is None
-        if fresh:
+        if A is None or cache is None:
             A = _jacobian(residual, w, q, r.size)
         step = -np.linalg.solve(A, r)
         if not fresh and np.linalg.norm(step) > 0.5 * previous:  # stale: converging slowly

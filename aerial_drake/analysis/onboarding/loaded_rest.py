@@ -14,13 +14,13 @@ Assumption 1 (``sigma_min(J_3)`` above the scenario's ``sigma_min_J3_limit``), t
 position limits (a run stops there by default, ``joint_limits.positions: stop``), the joint
 efforts, the thrust range and the body torque bounds (the applied command's saturation,
 :func:`aerial_drake.control.limits.command_limits`), and Assumption 2 (``|f_d|`` above
-``f_d_limit``), and two a run does not stop on: the task loop faster than the vehicle's
+``f_d_limit``), and three a run does not stop on: the task loop faster than the vehicle's
 (the slowest root of ``-Lambda_z^-1 K_z`` at the loaded posture :data:`TASK_SEPARATION` times
 faster than the slowest CoM or attitude root, or no slower than :data:`TASK_SLOWDOWN` of its
 rate at the nominal posture where that is slower already), and the equilibrium stable (the
 closed loop linearised there: :meth:`RestLoop.slowest_root`; a push can pass a bifurcation
-where the arm's equilibrium turns unstable: on the UR3e pushed up, at about 42 N), and the end effector held within :data:`EE_HOLD_FRACTION` of the workspace
-radius of its target.
+where the arm's equilibrium turns unstable: on the UR3e pushed up, at about 42 N), and the
+end effector held within :data:`EE_HOLD_FRACTION` of the workspace radius of its target.
 
 The task-loop limit is what a slow push meets first near a singularity of J_3: Lambda_z
 grows along the direction J_3 loses, its task root slows towards 0, and the static
@@ -115,17 +115,18 @@ class RestLoop:
         roots = loop_roots(subject.mass, g.K_x, g.D_x, g.k_R, g.k_w, g.Lambda2_bar)
         self.vehicle_rate = abs(max(roots.slowest_com.real, roots.slowest_attitude.real))
         self._K_z = np.diag(np.asarray(g.K_z, dtype=float))
-        self._jacobian: dict = {}
+        self._jacobian: dict = {}  # the last Newton Jacobian, reused along a continuation
+        self._f_d_at = diagnostics_slices(model.n)["f_d_norm"].start
+        # The nominal posture's slowest closed-loop root and task rate: the references of
+        # the stability usage and of the task-loop limit.
         self.nominal_growth = self.slowest_root(subject.q0)
-        self.task_rate_needed, self.task_rule = np.inf, ""  # set from the nominal posture
         nominal = self.task_rate(subject.q0)
         self.task_rate_needed = min(TASK_SEPARATION * self.vehicle_rate,
                                     TASK_SLOWDOWN * nominal)
         self.task_rule = (f"{TASK_SEPARATION:g}x the vehicle's slowest root, "
                           f"{-self.vehicle_rate:.3g} 1/s"
                           if self.task_rate_needed < TASK_SLOWDOWN * nominal else
-                          f"{TASK_SLOWDOWN:g} of its {-nominal:.3g} 1/s at the nominal posture")  # the last Newton Jacobian, reused along a continuation
-        self._f_d_at = diagnostics_slices(model.n)["f_d_norm"].start
+                          f"{TASK_SLOWDOWN:g} of its {-nominal:.3g} 1/s at the nominal posture")
 
     # --- Loads ---------------------------------------------------------------------------
     def vehicle_push(self, start: np.ndarray, end: np.ndarray) -> ExternalForce:

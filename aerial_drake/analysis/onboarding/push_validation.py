@@ -116,8 +116,9 @@ def simulate_push(subject: CheckSubject, force: np.ndarray,
         result = run_scenario(scenario, progress=False)
         failure = ""
     except SimulationFailed as err:
-        result = err.result
-        failure = str(err)
+        if err.result is None:  # stopped before a log (an interrupt): nothing to measure
+            raise
+        result, failure = err.result, str(err)
     log = result.log
     tracking = entries(log["tracking"], result.layouts["tracking"])
     violated: tuple[str, ...] = ()
