@@ -88,7 +88,7 @@ def reach(subject: CheckSubject) -> list[Reach]:
         def at(d: float, q_guess: np.ndarray) -> tuple[np.ndarray | None, str, float]:
             q = _configuration(subject, {**base, "p_WE": p0 + d * u}, q_guess, ctx)
             if q is None:
-                return None, "no configuration realises it", 0.0
+                return None, "the arm's workspace ends (no configuration realises it)", 0.0
             why, sigma = _limits(subject, q, ctx, sigma_limit)
             return (None, why, sigma) if why else (q, "", sigma)
 
