@@ -118,9 +118,11 @@ def _say(stream: TextIO | None, text: str) -> None:
 
 
 def check_robot(file: Path, scenario: str | None = None, stream: TextIO | None = None,
-                *, torques: bool = True) -> RobotCheck:
+                *, torques: bool = True, directions: tuple[str, ...] | None = None
+                ) -> RobotCheck:
     """The margins of ``robot check FILE [--scenario S]`` (module docstring); progress lines
-    on ``stream``. ``torques``: also the end-effector torques (six more searches).
+    on ``stream``. ``torques``: also the end-effector torques (six more searches);
+    ``directions``: the force and torque margins along these only (default: the six).
 
     Raises:
         OnboardingError: FILE or S missing, the hover point unreachable (exit status 2).
@@ -133,13 +135,13 @@ def check_robot(file: Path, scenario: str | None = None, stream: TextIO | None =
     _say(stream, "reach along the heading axes ...")
     reaches = reach(subject)
     _say(stream, "push margins on the vehicle (an equilibrium per step) ...")
-    push = direction_margins(loop, "vehicle push", stream)
+    push = direction_margins(loop, "vehicle push", stream, directions)
     _say(stream, "end-effector force margins ...")
-    ee_force = direction_margins(loop, "end-effector force", stream)
+    ee_force = direction_margins(loop, "end-effector force", stream, directions)
     ee_torque: list[Margin] = []
     if torques:
         _say(stream, "end-effector torque margins ...")
-        ee_torque = direction_margins(loop, "end-effector torque", stream)
+        ee_torque = direction_margins(loop, "end-effector torque", stream, directions)
     x = np.concatenate([subject.q0, np.zeros(subject.model.plant.num_velocities())])
     Lambda_z = loop.controller.solve(x, *subject.references).Lambda_z
     gains = subject.scenario.gains

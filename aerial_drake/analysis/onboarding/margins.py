@@ -125,9 +125,10 @@ def _j3_sign(loop: RestLoop, q: np.ndarray) -> float:
 
 
 def direction_margins(loop: RestLoop, kind: str, stream: TextIO | None = None,
-                      ) -> list[Margin]:
-    """The :class:`Margin` of each of :data:`DIRECTIONS` for ``kind``: "vehicle push",
-    "end-effector force" or "end-effector torque" (about the heading frame's axes)."""
+                      directions: tuple[str, ...] | None = None) -> list[Margin]:
+    """The :class:`Margin` of each of :data:`DIRECTIONS` (or of those named in
+    ``directions``) for ``kind``: "vehicle push", "end-effector force" or "end-effector
+    torque" (about the heading frame's axes)."""
     subject = loop.subject
     H = subject.heading_axes
     q0 = subject.q0
@@ -155,6 +156,8 @@ def direction_margins(loop: RestLoop, kind: str, stream: TextIO | None = None,
                          "'end-effector torque'")
     out = []
     for label, axis, sign in DIRECTIONS:
+        if directions is not None and label not in directions:
+            continue
         u = sign * H[:, axis]
         largest, capped, binding, state = largest_load(loop, load, u, cap, q0)
         if stream is not None:
