@@ -25,6 +25,8 @@ from aerial_drake.dynamics.equilibrium import kinematic_J3
 
 #: The bisection stops when the bracket is this fraction of its upper end.
 RELATIVE_TOLERANCE = 0.01
+#: The bisection stops below this fraction of the cap (a margin of about 0).
+FLOOR = 1e-4
 #: The searches' caps, in units of the robot's weight m g: a vehicle push (N) and an
 #: end-effector force (N); an end-effector torque's cap is the weight times the nominal
 #: distance from the CoM to the end effector (N m).
@@ -72,6 +74,9 @@ def largest_load(loop: RestLoop, load: Callable[[np.ndarray, np.ndarray], Extern
     unloaded equilibrium ``q0``."""
     model = loop.subject.model
     arm = model.arm_position_indices
+    at_rest = loop.limits_at(q0)
+    if not at_rest.ok:  # nothing to push from
+        return 0.0, False, "at the nominal posture already: " + at_rest.violated[0], None
     lo, state_lo, q_lo = 0.0, None, q0
     sign_lo = _j3_sign(loop, q0)
     step = cap / 32.0
@@ -107,7 +112,7 @@ def largest_load(loop: RestLoop, load: Callable[[np.ndarray, np.ndarray], Extern
             return cap, True, "", state_lo
         if moved < 0.25 * MAX_JOINT_STEP:
             step *= 2.0
-    while hi - lo > RELATIVE_TOLERANCE * hi:
+    while hi - lo > RELATIVE_TOLERANCE * hi and hi > FLOOR * cap:
         mid = 0.5 * (lo + hi)
         state, why, _ = attempt(mid)
         if state is None:
