@@ -240,16 +240,17 @@ class RestLoop:
         if not ee_error <= self.ee_hold:
             violated.append(f"end-effector hold: {1000 * ee_error:.3g} mm from its target, "
                             f"past {1000 * self.ee_hold:.3g} mm")
-        # Last, and only where nothing else broke (it costs 2 nv + 1 evaluations of (1)).
+        # Last, and only where nothing else broke (it costs 2 nv + 1 evaluations of (1)):
+        # so a state past another limit has no "closed-loop speed" usage.
         if not violated:
-            rate = -self.slowest_root(q, external)
+            rate = -self.slowest_root(q, external)  # the slowest root's decay rate
             need = ROOT_KEEP * -self.nominal_growth
             usage["closed-loop speed"] = need / rate if rate > 0 else np.inf
-        if not violated and not rate > need:
-            violated.append(f"closed-loop speed: the slowest root at {-rate:.3g} 1/s, "
-                            f"{'unstable' if rate <= 0 else 'slower than'} "
-                            f"{ROOT_KEEP:g} of the nominal posture's {self.nominal_growth:.3g}"
-                            " 1/s")
+            if not rate > need:
+                violated.append(
+                    f"closed-loop speed: the slowest root at {-rate:.3g} 1/s, "
+                    f"{'unstable' if rate <= 0 else 'slower than'} {ROOT_KEEP:g} of the "
+                    f"nominal posture's {self.nominal_growth:.3g} 1/s")
         return RestState(q=q, command=command, sigma_min=sigma, usage=usage,
                          violated=tuple(violated))
 
