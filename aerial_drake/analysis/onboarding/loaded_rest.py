@@ -12,7 +12,7 @@ deflection, and so a push is limited by the arm's workspace as much as by the in
 At an equilibrium :meth:`RestLoop.limits_at` checks what a run would stop on or clip:
 Assumption 1 (``sigma_min(J_3)`` above the scenario's ``sigma_min_J3_limit``), the arm's joint
 position limits (a run stops there by default, ``joint_limits.positions: stop``; not with
-``report``, and then neither does the check, which still gives their usage), the joint
+``report``, and then neither does the check), the joint
 efforts, the thrust range and the body torque bounds (the applied command's saturation,
 :func:`aerial_drake.control.limits.command_limits`), and Assumption 2 (``|f_d|`` above
 ``f_d_limit``), and three a run does not stop on: the task loop faster than the vehicle's
@@ -202,11 +202,13 @@ class RestLoop:
         q_arm = q[model.arm_position_indices]
         for name, value, low, high in zip(self.joint_names, q_arm, self.q_lower,
                                           self.q_upper):
+            if not self.joint_limits_bind:
+                continue
             half = 0.5 * (high - low)
             usage[f"joint '{name}' position"] = (
                 abs(value - 0.5 * (high + low)) / half if np.isfinite(half) and half > 0
                 else 0.0)
-            if self.joint_limits_bind and not low <= value <= high:
+            if not low <= value <= high:
                 violated.append(f"joint '{name}' position {value:.3f} rad outside "
                                 f"[{low:.3f}, {high:.3f}]")
         f_d = float(out.diagnostics[self._f_d_at])
