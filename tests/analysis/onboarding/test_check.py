@@ -9,6 +9,7 @@ import warnings
 import numpy as np
 import pytest
 
+from aerial_drake import cli
 from aerial_drake.analysis.onboarding import OnboardingError, check_robot, format_check
 from aerial_drake.analysis.onboarding.check import com_compliance
 from aerial_drake.analysis.onboarding.check_subject import load_subject
@@ -137,6 +138,15 @@ def test_a_description_without_its_hover_file_is_refused(tmp_path):
         check_robot(scenario, scenario=str(scenario))
     with pytest.raises(OnboardingError, match="no such file"):
         check_robot(tmp_path / "nothing.yaml")
+
+
+def test_the_command_line_says_which_file_is_missing(tmp_path, capsys):
+    """``aerial-drake robot check`` on a description without its hover file: exit status 2
+    and the message on stderr, no traceback."""
+    description, _ = write_robot(tmp_path)
+    assert cli.main(["robot", "check", str(description), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert "quad_arm_hover.yaml" in err and "Traceback" not in err
 
 
 def test_a_scenario_file_is_its_own_hover(robot):
