@@ -35,7 +35,9 @@ the reference posture on the hover of the test): :func:`wrench_equilibrium` find
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from pydrake.common.eigen_geometry import Quaternion
@@ -139,7 +141,7 @@ def amplification_along_reference(reference: ReferenceSource, model: AerialManip
     return np.array(out)
 
 
-def _moved(q: np.ndarray, delta: np.ndarray) -> np.ndarray:
+def moved_positions(q: np.ndarray, delta: np.ndarray) -> np.ndarray:
     """``q`` (quaternion base) moved by ``delta = [rotation vector (World); position;
     joints]``, a step along the generalized velocity's coordinates."""
     theta = float(np.linalg.norm(delta[:3]))
@@ -163,7 +165,45 @@ def wrench_equilibrium(model: AerialManipulator, gains: Gains, references: tuple
     equilibrium without the wrench, e.g. the reference's posture) as the wrench grows in
     ``steps`` equal parts (the equilibrium moves far: about 1 rad on three joints for
     Table II's gains and the paper's 40 N / 20 N m), each by Newton's method with a central
-    finite-difference Jacobian. A quaternion base only.
+    finite-difference Jacobian. A quaternion base only
+    (:func:`external_force_equilibrium` with ``J_E^T w``).
+
+    Raises:
+        RuntimeError: a Newton solve does not converge to ``tolerance`` (the step's norm) in
+            ``max_iterations``.
+    """
+    w = np.concatenate([force, torque]).astype(float)  # the rows [v_E; w_E] of J6
+
+    def external(dynamics: DecoupledDynamics, d, fraction: float) -> np.ndarray:
+        J6, _ = dynamics.frame_jacobian(d, model.end_effector_frame)
+        return J6.T @ (fraction * w)
+
+    return external_force_equilibrium(model, gains, references, external, q_start,
+                                      steps=steps, tolerance=tolerance,
+                                      max_iterations=max_iterations)
+
+
+#: ``external(dynamics, d, fraction)``: the generalized force (nv, the plant's velocity
+#: coordinates) of ``fraction`` (0 to 1) of a constant load at the positions of ``d`` (the
+#: :class:`~aerial_drake.dynamics.decoupling.DecoupledDynamics` data there).
+ExternalForce = Callable[[DecoupledDynamics, Any, float], np.ndarray]
+
+
+def external_force_equilibrium(model: AerialManipulator, gains: Gains, references: tuple,
+                               external: ExternalForce, q_start: np.ndarray, *,
+                               steps: int = 10, tolerance: float = 1e-10,
+                               max_iterations: int = 30, controller=None,
+                               cache: dict | None = None) -> np.ndarray:
+    """The positions at which the paper's law holds the robot at rest under a constant
+    external generalized force ``G = external(dynamics, d, 1)`` (e.g. ``J_E^T w`` for an
+    end-effector wrench, :func:`wrench_equilibrium`, or a force on the vehicle) and the
+    constant ``references``: ``J_b^T [f e3; mu] + Q^T tau + G - g = 0`` at zero velocity,
+    followed from ``q_start`` as the load grows in ``steps`` equal parts, each by Newton's
+    method with a central finite-difference Jacobian. ``controller``: the law to hold it
+    (default: :func:`~aerial_drake.control.controller.make_controller` on ``model`` and
+    ``gains``, with its default assumption thresholds). ``cache``: a dict kept between the
+    calls of a continuation, whose Newton steps then reuse the last Jacobian (chord steps,
+    refreshed when they converge slowly). A quaternion base only.
 
     Raises:
         RuntimeError: a Newton solve does not converge to ``tolerance`` (the step's norm) in
@@ -171,44 +211,64 @@ def wrench_equilibrium(model: AerialManipulator, gains: Gains, references: tuple
     """
     plant = model.plant
     if plant.num_positions() != plant.num_velocities() + 1:
-        raise ValueError("wrench_equilibrium needs a quaternion floating base "
+        raise ValueError("the equilibrium needs a quaternion floating base "
                          f"(nq = nv + 1); got nq = {plant.num_positions()}, "
                          f"nv = {plant.num_velocities()}")
-    controller = make_controller(model, gains)
+    controller = controller if controller is not None else make_controller(model, gains)
     dynamics = DecoupledDynamics(plant, model.base_body)
     ctx = plant.CreateDefaultContext()
-    w = np.concatenate([force, torque]).astype(float)  # the rows [v_E; w_E] of J6
     zero_v = np.zeros(plant.num_velocities())
 
-    def residual(q: np.ndarray, w: np.ndarray) -> np.ndarray:
+    def residual(q: np.ndarray, fraction: float) -> np.ndarray:
         x = np.concatenate([q, zero_v])
         out = controller.solve(x, *references)
         plant.SetPositionsAndVelocities(ctx, x)
         d = dynamics.compute(ctx)
-        J6, _ = dynamics.frame_jacobian(d, model.end_effector_frame)
         base = np.concatenate([[0.0, 0.0, float(out.f)], out.mu])  # [f e3; mu] of (2)
-        return d.J_b.T @ base + d.Q.T @ out.tau + J6.T @ w - d.g  # (1) at rest
+        return (d.J_b.T @ base + d.Q.T @ out.tau + external(dynamics, d, fraction)
+                - d.g)  # (1) at rest
 
     q = np.array(q_start, dtype=float)
     for fraction in np.arange(1, steps + 1) / steps:
-        q = _newton(residual, fraction * w, q, tolerance, max_iterations)
+        q = _newton(residual, fraction, q, tolerance, max_iterations, cache)
     return q
 
 
-def _newton(residual, w: np.ndarray, q: np.ndarray, tolerance: float, max_iterations: int
-            ) -> np.ndarray:
+def _newton(residual, w, q: np.ndarray, tolerance: float, max_iterations: int,
+            cache: dict | None = None) -> np.ndarray:
     """A zero of ``residual(., w)`` (nv) over the positions, from ``q``, stepping by
-    :func:`_moved`."""
-    h = 1e-6
+    :func:`moved_positions`. With ``cache`` (a dict kept between the solves of a
+    continuation), the Jacobian of the last solve is reused (chord steps) and refreshed only
+    when a step does not shrink to half the last one; without it, a fresh Jacobian at every
+    step."""
+    A = None if cache is None else cache.get("A")
+    previous = np.inf
     for _ in range(max_iterations):
         r = residual(q, w)
-        A = np.column_stack([(residual(_moved(q, h * e), w) - residual(_moved(q, -h * e), w))
-                             / (2.0 * h) for e in np.eye(r.size)])
+        fresh = A is None or cache is None
+        if A is None or cache is None:
+            A = _jacobian(residual, w, q, r.size)
         step = -np.linalg.solve(A, r)
-        q = _moved(q, step)
-        if np.linalg.norm(step) < tolerance:
+        if not fresh and np.linalg.norm(step) > 0.5 * previous:  # stale: converging slowly
+            A = _jacobian(residual, w, q, r.size)
+            step = -np.linalg.solve(A, r)
+        q = moved_positions(q, step)
+        previous = float(np.linalg.norm(step))
+        if previous < tolerance:
+            if cache is not None:
+                cache["A"] = A
             return q
+    if cache is not None:
+        cache.pop("A", None)
     raise RuntimeError(f"wrench_equilibrium: no equilibrium found in {max_iterations} "
                        f"Newton steps (last step {np.linalg.norm(step):.3g}, residual "
                        f"{np.linalg.norm(r):.3g}): raise steps (smaller increments of the "
                        "wrench) or lower the wrench")
+
+
+def _jacobian(residual, w, q: np.ndarray, size: int) -> np.ndarray:
+    """d residual(., w) / d q along :func:`moved_positions`'s coordinates, central differences."""
+    h = 1e-6
+    return np.column_stack([(residual(moved_positions(q, h * e), w)
+                             - residual(moved_positions(q, -h * e), w)) / (2.0 * h)
+                            for e in np.eye(size)])
