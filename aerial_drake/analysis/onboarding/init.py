@@ -9,14 +9,16 @@ written (docs/robots.md, "robot init"). The steps, each in its module:
 4. :mod:`.posture`: the nominal posture (Assumption 1 and joint-limit margins, the tool
    pointing where asked);
 5. at that posture: the system's CoM, the end effector's offset r_o of (33), the locked
-   inertia (every body rigidly locked, about the CoM), the workspace radius;
+   inertia (every body rigidly locked, about the CoM);
 6. :mod:`.gains`: Table II scaled by the documented rule;
-7. :mod:`.writer`: the two files, then the scenario loaded back and validated as a run
-   would (so what was written runs).
+7. :mod:`.writer`: the three files; :mod:`.workspace`: the workspace radius from the end
+   effector's reach (``robot check``'s); then the scenarios loaded back and validated as a
+   run would (so what was written runs).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 import re
@@ -31,6 +33,7 @@ from aerial_drake.analysis.onboarding.errors import OnboardingError
 from aerial_drake.analysis.onboarding.gains import ScaledGains, scaled_gains
 from aerial_drake.analysis.onboarding.limits import InputLimits, input_limits
 from aerial_drake.analysis.onboarding.posture import Posture, arm_length, choose_posture
+from aerial_drake.analysis.onboarding.workspace import REACH_SHARE, reach_radius
 from aerial_drake.analysis.onboarding.writer import (
     CONTROLLER_PERIOD,
     HOVER_COM,
@@ -47,7 +50,8 @@ from aerial_drake.simulation.outputs import write_text_atomically
 
 #: The most task candidates tried (joint components chosen among the arm's joints).
 MAX_TASK_CANDIDATES = 12
-#: The workspace radius written, as a share of the arm's length at the nominal posture.
+#: The workspace radius written first, as a share of the arm's length at the nominal posture
+#: (the files need one to load; then replaced by the reach's, :mod:`.workspace`).
 WORKSPACE_SHARE = 0.3
 _AXES = {"x": (1, 0, 0), "y": (0, 1, 0), "z": (0, 0, 1)}
 _DIRECTIONS = {"down": (0.0, 0.0, -1.0), "forward": (1.0, 0.0, 0.0), "up": (0.0, 0.0, 1.0)}
@@ -290,6 +294,19 @@ def _finish(options, found, name, task, tried, key, posture, limits, robot, mani
     write_text_atomically(robot_path, robot_text(robot_file))
     write_text_atomically(scenario_path, hover_yaml)
     write_text_atomically(pick_path, pick_and_place_text(hover, hover_yaml))
+    # The radius from the reach needs the written files (robot check's subject).
+    radius, reaches = reach_radius(scenario_path)
+    if not radius > 0:
+        raise OnboardingError(
+            f"the end effector cannot move from the nominal posture in some direction "
+            f"({', '.join(f'{r.direction}: {r.binding}' for r in reaches if r.distance <= 0)})"
+            ": give another --tool-direction or --task", "--tool-direction")
+    robot_file = dataclasses.replace(robot_file, workspace_radius=radius, workspace_note=(
+        f"{REACH_SHARE:g} x the smallest reach of the end effector from the nominal posture "
+        f"(robot check): {', '.join(f'{r.direction} {1e3 * r.distance:.0f}' for r in reaches)}"
+        " mm."))
+    workspace = radius
+    write_text_atomically(robot_path, robot_text(robot_file))
     _say(stream, f"  wrote {robot_path.name}, {scenario_path.name} and {pick_path.name}")
     from aerial_drake.simulation.scenarios import load_scenario
 
