@@ -47,6 +47,8 @@ TASK_POLE_LIMIT = 0.3
 #: away, and the sampled loop diverged).
 NEARBY_POSTURES = 40
 NEARBY_SPREAD = 0.3
+#: The posture search's cheaper check: this many nearby postures per candidate.
+SEARCH_NEARBY_POSTURES = 8
 #: The shipped scenario whose gains are Table II's.
 TABLE_II_SCENARIO = "nominal"
 
@@ -143,6 +145,27 @@ def nearby_positions(manip: AerialManipulator, q: np.ndarray, count: int = NEARB
     return out
 
 
+def table_ii_K_z(manip: AerialManipulator) -> np.ndarray:
+    """Table II's K_z for each of ``manip``'s task rows, by the row's kind."""
+    _, by_kind, _ = table_ii()
+    assert manip.task is not None
+    return np.array([by_kind.get(_kind(r), by_kind["position"])[1] for r in manip.task.rows],
+                    float)
+
+
+def slowest_task_pole(manip: AerialManipulator, q: np.ndarray, K_z0: np.ndarray,
+                      controller_period: float, nearby: int = SEARCH_NEARBY_POSTURES) -> float:
+    """The slowest task pole (1/s, positive) at positions ``q`` with ``K_z0`` capped as
+    :func:`scaled_gains` caps it, over ``nearby`` postures about ``q`` (the posture search's
+    cheaper version of the rule); 0 where J_3 is singular."""
+    try:
+        inertias = [task_inertia(manip, p)[1] for p in nearby_positions(manip, q, nearby)]
+    except np.linalg.LinAlgError:
+        return 0.0
+    K, _ = _capped_K_z(K_z0, inertias, TASK_POLE_LIMIT / controller_period)
+    return float(np.min(np.linalg.eigvals(np.linalg.solve(inertias[0], np.diag(K))).real))
+
+
 def scaled_gains(manip: AerialManipulator, q: np.ndarray, controller_period: float
                  ) -> ScaledGains:
     """The gains of the module docstring for ``manip`` at positions ``q`` (the nominal
@@ -158,7 +181,7 @@ def scaled_gains(manip: AerialManipulator, q: np.ndarray, controller_period: flo
     k_R, k_w = suggested_attitude_gains(roots)
     assert manip.task is not None
     kinds = [_kind(r) for r in manip.task.rows]
-    K_z0 = np.array([by_kind.get(k, by_kind["position"])[1] for k in kinds], float)
+    K_z0 = table_ii_K_z(manip)
     inertias = [Lambda_z] + [task_inertia(manip, p)[1] for p in nearby_positions(manip, q)[1:]]
     K_z, capped = _capped_K_z(K_z0, inertias, TASK_POLE_LIMIT / controller_period)
     # A row with a lowered K_z takes the position rows' K_y: its stiffness K_y K_z falls less

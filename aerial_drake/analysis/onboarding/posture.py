@@ -2,20 +2,29 @@
 
 The vehicle level at the origin, the arm at ``q``; the posture maximises
 
-    score(q) = min( sigma_min(J_3(q)) / sigma_ref ,  joint margin(q) )
+    score(q) = min( sigma_min(J_3(q)) / sigma_ref ,  joint margin(q) ,  p_task(q) / p_CoM )
 
-(the two margins the paper's law lives on: Assumption 1, and the room each joint has to move
-before its limit), where ``joint margin`` is the smallest of ``2 min(q - lower, upper - q) /
-(upper - lower)`` over the joints (1 at mid-range, 0 at a limit; a joint without limits
-counts 1) and ``sigma_ref`` the largest sigma_min(J_3) among the random draws (so both terms
-are about 1 at their best). Subject to: the tool axis pointing where asked (``tool
-direction``; a minimum-norm Newton projection after every step), the arm's weight held
-at hover with at most :data:`HOVER_TORQUE_SHARE` of each body torque bound (the arm hanging
-far to one side would spend the vehicle's torque on holding it), and the end effector at
-least :data:`BELOW_SHARE` of the arm's length below the vehicle's frame (an arm folded up
-beside the vehicle reaches into its rotors). A random search over the
-joint ranges, then a shrinking random local search from the best: no gradient is needed, and
-sigma_min is not smooth where singular values cross.
+the margins the paper's law lives on: Assumption 1, the room each joint has to move before
+its limit, and how fast the task loop can be made there.
+
+- ``sigma_ref``: the largest sigma_min(J_3) among the random draws (so each term is about 1
+  at its best);
+- ``joint margin``: the smallest of ``2 min(q - lower, upper - q) / (upper - lower)`` over
+  the joints (1 at mid-range, 0 at a limit; a joint without limits counts 1);
+- ``p_task``: the slowest pole of ``-Lambda_z^-1 K_z`` with :mod:`.gains`' K_z rule at ``q``,
+  over ``p_CoM`` = :data:`TASK_SPEED_TARGET`, Table II's slowest CoM root. Where the task's
+  inertia is ill conditioned (a light wrist whose orientation moves heavy links) the K_z the
+  sampling allows leaves a task root far slower than the vehicle's: 0.65 1/s at a hexacopter
+  arm's first posture, whose end effector then turned 0.8 rad under a slowly growing push.
+
+Subject to: the tool axis pointing where asked (``tool direction``; a minimum-norm Newton
+projection after every step), the arm's weight held at hover with at most
+:data:`HOVER_TORQUE_SHARE` of each body torque bound (the arm hanging far to one side would
+spend the vehicle's torque on holding it), and the end effector at least
+:data:`BELOW_SHARE` of the arm's length below the vehicle's frame (an arm folded up beside
+the vehicle reaches into its rotors). A random search over the joint ranges, then a
+shrinking random local search from the best: no gradient is needed, and sigma_min is not
+smooth where singular values cross.
 """
 
 from __future__ import annotations
@@ -26,12 +35,16 @@ import numpy as np
 
 from aerial_drake.analysis.equilibria import hover_inputs
 from aerial_drake.analysis.onboarding.errors import OnboardingError
+from aerial_drake.analysis.onboarding.gains import slowest_task_pole, table_ii_K_z
+from aerial_drake.analysis.onboarding.writer import CONTROLLER_PERIOD
 from aerial_drake.control.law import SIGMA_MIN_J3_LIMIT
 from aerial_drake.dynamics.equilibrium import kinematic_J3
 from aerial_drake.robots.models import AerialManipulator
 
 #: The share of each body torque bound the arm's weight may take at hover.
 HOVER_TORQUE_SHARE = 0.3
+#: The task speed the score's third term asks for (1/s): Table II's slowest CoM root.
+TASK_SPEED_TARGET = 3.5
 #: How far below the vehicle's frame the end effector must be, in arm lengths.
 BELOW_SHARE = 0.3
 #: Pointing is met when the tool axis is within this angle of the direction (rad).
@@ -47,6 +60,7 @@ class Posture:
     q_arm: np.ndarray  # (n) rad
     sigma_min_J3: float
     joint_margin: float  # 0 (at a limit) .. 1 (every joint mid-range)
+    task_speed: float  # the slowest task pole under the K_z rule (1/s)
     hover_torque_share: float  # max over axes of |mu_hover| / bound
     pointing_error: float  # rad (0 without a tool direction)
     score: float
@@ -77,6 +91,7 @@ class _Evaluator:
         self.upper = np.where(self.bounded, upper, UNBOUNDED_RANGE[1])
         self.axis, self.direction = tool_axis, direction
         self.torque_bound = manip.body_torque_limits()
+        self.K_z0 = table_ii_K_z(manip)
         self.plant.SetPositions(self.ctx, self.q)
         self.min_depth = BELOW_SHARE * arm_length(manip, self.ctx)
 
@@ -117,9 +132,9 @@ class _Evaluator:
             q = np.clip(q + np.linalg.lstsq(J, w, rcond=None)[0], self.lower, self.upper)
         return q, float(np.linalg.norm(self.pointing(q)[0]))
 
-    def terms(self, q_arm: np.ndarray) -> tuple[float, float, float, float]:
-        """(sigma_min(J_3), joint margin, hover torque share, how far the end effector is
-        above the lowest it may be (m; > 0 too high)) at ``q_arm``."""
+    def terms(self, q_arm: np.ndarray) -> tuple[float, float, float, float, float]:
+        """(sigma_min(J_3), joint margin, slowest task pole (1/s), hover torque share, how far
+        the end effector is above the lowest it may be (m; > 0 too high)) at ``q_arm``."""
         q = self._set(q_arm)
         height = float(self.manip.end_effector_frame.CalcPoseInWorld(self.ctx).translation()[2]
                        - self.q[self.manip.base_position_indices][-1])
@@ -128,17 +143,21 @@ class _Evaluator:
         margin = float(np.min(np.where(self.bounded, 2.0 * room, 1.0), initial=1.0))
         _, mu, _, _ = hover_inputs(self.manip, q)
         share = float(np.max(np.abs(mu) / self.torque_bound))
-        return sigma, margin, share, height + self.min_depth
+        # The task speed only where the constraints hold (it costs nine mass matrices).
+        keep = share <= HOVER_TORQUE_SHARE and height + self.min_depth <= 0.0
+        speed = (slowest_task_pole(self.manip, q, self.K_z0, CONTROLLER_PERIOD)
+                 if sigma > SIGMA_MIN_J3_LIMIT and keep else 0.0)
+        return sigma, margin, speed, share, height + self.min_depth
 
 
-_Found = tuple[np.ndarray, float, float, float, float, float]  # q, the terms, pointing
+_Found = tuple[np.ndarray, float, float, float, float, float, float]  # q, terms, pointing
 
 
 def _score(found: _Found, sigma_ref: float) -> float:
-    _, sigma, margin, share, too_high, pointing = found
+    _, sigma, margin, speed, share, too_high, pointing = found
     penalty = (10.0 * max(0.0, share - HOVER_TORQUE_SHARE) + 10.0 * max(0.0, too_high)
                + 1e3 * pointing)
-    return min(sigma / sigma_ref, margin) - penalty
+    return min(sigma / sigma_ref, margin, speed / TASK_SPEED_TARGET) - penalty
 
 
 def choose_posture(manip: AerialManipulator, *, tool_axis: np.ndarray,
@@ -173,7 +192,8 @@ def choose_posture(manip: AerialManipulator, *, tool_axis: np.ndarray,
             best, best_score = trial, score
         elif i % 20 == 19:
             step = step * 0.7  # narrow down where no step has helped lately
-    q, sigma, margin, share, too_high, pointing = best
-    return Posture(q_arm=q, sigma_min_J3=sigma, joint_margin=margin, hover_torque_share=share,
+    q, sigma, margin, speed, share, too_high, pointing = best
+    return Posture(q_arm=q, sigma_min_J3=sigma, joint_margin=margin, task_speed=speed,
+                   hover_torque_share=share,
                    pointing_error=pointing, score=best_score,
                    ee_height=too_high - ev.min_depth)
