@@ -24,7 +24,11 @@ spend the vehicle's torque on holding it), and the end effector at least
 :data:`BELOW_SHARE` of the arm's length below the vehicle's frame (an arm folded up beside
 the vehicle reaches into its rotors). A random search over the joint ranges, then a
 shrinking random local search from the best: no gradient is needed, and sigma_min is not
-smooth where singular values cross.
+smooth where singular values cross. Drake's ``InverseKinematics`` is not used here: the
+pointing constraint alone is two equations that a minimum-norm Newton step meets to 1e-6 rad
+in a few iterations, and a mathematical program per candidate (800 of them) would cost more
+than the score it serves; the run's start posture is still solved with it
+(:func:`aerial_drake.dynamics.equilibrium.solve_configuration`).
 """
 
 from __future__ import annotations
