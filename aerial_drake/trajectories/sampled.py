@@ -12,15 +12,15 @@ Hermite segments of the order the law needs, matching at both knots every deriva
   space matching both ends' angular velocity and acceleration (as the waypoints kind's
   orientation, :mod:`.waypoints`): C^2 on SO(3).
 
-The error bound is checked at load, against the function itself: at a quarter and three
-quarters of every segment (where the interpolation error of a derivative of either parity is
-not at a zero), each signal's spline must be within :data:`TOLERANCE` times the larger of 1
-and the signal's largest magnitude over the knots (units of the signal: m, m/s, ..., rad/s^2).
-A segment that is not is halved (its midpoint becomes a knot), down to
-:data:`REFINEMENTS` halvings; past that the reference is refused with a ValueError naming
-``python.function``, the signal, the time, the error and the tolerance. A derivative that is
-not the rate of the one below it, or that jumps, shows up there too: the spline, which
-matches the given derivatives at the knots, cannot follow the function in between.
+The error bound is checked at load, against the function itself: at a third of every
+segment (:data:`CHECK_AT`: not the middle, where the leading interpolation error of every
+odd derivative vanishes by symmetry), each signal's spline must be within :data:`TOLERANCE`
+times the larger of 1 and the signal's largest magnitude over the knots (in the signal's
+units: m, m/s, ..., rad/s^2). A segment that is not is halved (its midpoint becomes a knot),
+down to :data:`REFINEMENTS` halvings; past that the reference is refused with a ValueError
+naming ``python.function``, the signal, the time, the error and the tolerance. A derivative
+that is not the rate of the one below it, or that jumps, shows up there too: the spline,
+which matches the given derivatives at the knots, cannot follow the function in between.
 
 Outside [0, duration] the sampled reference holds its end value with zero derivatives.
 """
@@ -37,9 +37,14 @@ from aerial_drake.trajectories.reference import (
     task_reference_size,
 )
 from aerial_drake.trajectories.so3 import (
+    INVERSE_MAX_ANGLE,
+    ROTATION_TOLERANCE,
+    _coef_a,
+    _coef_a_rate,
+    _coef_b,
+    _coef_b_rate,
+    _coef_c,
     log_so3,
-    rotation_vector_acceleration,
-    rotation_vector_velocity,
 )
 from aerial_drake.trajectories.spline_kernel import (
     compile_spline_reference,
@@ -51,14 +56,18 @@ __all__ = ["SampledReference", "sample_onto_splines", "SAMPLE_PERIOD", "REFINEME
            "TOLERANCE"]
 
 #: Knot spacing of the task's and the heading's quintics before any refinement (s), at most:
-#: one call of the user's function per 20 controller samples at 1 kHz, with two more per
-#: segment for the check.
+#: one call of the user's function per 20 controller samples at 1 kHz (none when the
+#: load-time check sampled there already, :meth:`.python_kind._UserReference.packed`), and
+#: one more per segment for the check.
 SAMPLE_PERIOD = 0.02
 #: The CoM's degree-9 segments span this many of those knots (0.1 s): its 4th derivative
 #: from a segment of length T carries the samples' rounding times about 1/T^4 (1e-4 of the
 #: signal at T = 5 ms, 1e-8 at 0.1 s), while its interpolation error falls as T^6.
 COM_STRIDE = 5
 COM_SAMPLE_PERIOD = SAMPLE_PERIOD * COM_STRIDE
+#: Where in each segment (tau) the splines are checked against the function: not at the
+#: middle, where the leading interpolation error of every odd derivative vanishes by symmetry.
+CHECK_AT = 1.0 / 3.0
 #: Halvings of a segment whose spline misses the function: the task's 20 ms down to 2.5 ms.
 REFINEMENTS = 3
 #: The largest error allowed, relative to max(1, the signal's largest magnitude).
@@ -100,24 +109,71 @@ def _signals(n_joints: int) -> list[tuple[str, np.ndarray]]:
     return out
 
 
-def _orientation(knots: np.ndarray, R: np.ndarray, w: np.ndarray, dw: np.ndarray,
-                 label: str) -> PiecewiseHermite:
-    """The rotation vector's quintic per segment (module docstring), in R_i's tangent space."""
-    n = knots.size - 1
-    starts, ends = np.empty((n, 3, 3)), np.empty((n, 3, 3))
-    zero = np.zeros(3)
-    for i in range(n):
+def _hats(v: np.ndarray) -> np.ndarray:
+    """hat(v) of each row of ``v`` (N, 3): (N, 3, 3)."""
+    out = np.zeros(v.shape[:-1] + (3, 3))
+    out[..., 0, 1], out[..., 0, 2], out[..., 1, 2] = -v[..., 2], v[..., 1], -v[..., 0]
+    out[..., 1, 0], out[..., 2, 0], out[..., 2, 1] = v[..., 2], -v[..., 1], v[..., 0]
+    return out
+
+
+def _coefficients(function, t: np.ndarray) -> np.ndarray:
+    return np.array([function(float(x)) for x in t])
+
+
+def _log_rotations(R: np.ndarray, knots: np.ndarray, label: str) -> np.ndarray:
+    """log_so3 of each of ``R`` (N, 3, 3), relative rotations over the segments: the usual
+    case (turns under 90 deg) at once, any other (or a matrix that is not a rotation, for
+    the message) by :func:`.so3.log_so3` itself."""
+    s = 0.5 * np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0],
+                        R[:, 1, 0] - R[:, 0, 1]], axis=1)
+    sin_t = np.linalg.norm(s, axis=1)
+    cos_t = 0.5 * (np.trace(R, axis1=1, axis2=2) - 1.0)
+    t = np.arctan2(sin_t, cos_t)
+    out = s * np.where(sin_t > 0.0, t / np.where(sin_t > 0.0, sin_t, 1.0), 0.0)[:, None]
+    orthogonality = np.abs(np.swapaxes(R, 1, 2) @ R - np.eye(3)).max(axis=(1, 2))
+    odd = (cos_t < 0.0) | (orthogonality > ROTATION_TOLERANCE) | (
+        np.abs(np.linalg.det(R) - 1.0) > ROTATION_TOLERANCE) | ~np.isfinite(sin_t)
+    for i in np.flatnonzero(odd):
         try:
-            r_end = log_so3(R[i].T @ R[i + 1])
-            start_rate = R[i].T @ w[i]  # body rates: R^T w, and R^T dw (hat(w) w = 0)
-            end_rate = rotation_vector_velocity(r_end, R[i + 1].T @ w[i + 1])
-            starts[i] = (zero, start_rate,
-                         rotation_vector_acceleration(zero, start_rate, R[i].T @ dw[i]))
-            ends[i] = (r_end, end_rate,
-                       rotation_vector_acceleration(r_end, end_rate, R[i + 1].T @ dw[i + 1]))
+            out[i] = log_so3(R[i])
         except ValueError as err:
             raise ValueError(f"Invalid python: 'python.function' {label!r}: R_ed at t = "
                              f"{knots[i]:.4f} to {knots[i + 1]:.4f} s: {err}") from None
+    return out
+
+
+def _orientation(knots: np.ndarray, R: np.ndarray, w: np.ndarray, dw: np.ndarray,
+                 label: str) -> PiecewiseHermite:
+    """The rotation vector's quintic per segment (module docstring), in R_i's tangent space:
+    from r = 0 with the body rates R_i^T w_i and R_i^T dw_i (hat(w) w = 0), to
+    r_end = log(R_i^T R_(i+1)) with r' = J_r(r)^-1 omega, r'' = J_r^-1 (domega - J_r' r')
+    (:mod:`.so3`, for all segments at once)."""
+    Rt = np.swapaxes(R, 1, 2)
+    r_end = _log_rotations(Rt[:-1] @ R[1:], knots, label)
+    angle = np.linalg.norm(r_end, axis=1)
+    if np.any(angle >= INVERSE_MAX_ANGLE):
+        i = int(np.argmax(angle))
+        raise ValueError(f"Invalid python: 'python.function' {label!r}: R_ed turns by "
+                         f"{angle[i]:.3f} rad between t = {knots[i]:.4f} and "
+                         f"{knots[i + 1]:.4f} s: is it continuous?")
+    K = _hats(r_end)
+    K2 = K @ K
+    J_inv = np.eye(3) + 0.5 * K + _coefficients(_coef_c, angle)[:, None, None] * K2
+    omega = (Rt[1:] @ w[1:, :, None])[..., 0]
+    domega = (Rt[1:] @ dw[1:, :, None])[..., 0]
+    end_rate = (J_inv @ omega[..., None])[..., 0]
+    Kd = _hats(end_rate)
+    rate = np.sum(r_end * end_rate, axis=1)[:, None, None]
+    J_dot = (-_coefficients(_coef_a_rate, angle)[:, None, None] * rate * K
+             - _coefficients(_coef_a, angle)[:, None, None] * Kd
+             + _coefficients(_coef_b_rate, angle)[:, None, None] * rate * K2
+             + _coefficients(_coef_b, angle)[:, None, None] * (K @ Kd + Kd @ K))
+    end_acceleration = (J_inv @ (domega - (J_dot @ end_rate[..., None])[..., 0])[..., None]
+                        )[..., 0]
+    starts = np.stack([np.zeros_like(r_end), (Rt[:-1] @ w[:-1, :, None])[..., 0],
+                       (Rt[:-1] @ dw[:-1, :, None])[..., 0]], axis=1)
+    ends = np.stack([r_end, end_rate, end_acceleration], axis=1)
     return PiecewiseHermite.from_segment_ends(knots, starts, ends)
 
 
@@ -156,8 +212,7 @@ def _refine(source: ReferenceSource, knots: np.ndarray, values: np.ndarray, eval
     todo = np.arange(knots.size - 1)
     worst = 0.0
     for level in range(REFINEMENTS + 1):
-        lo, hi = knots[todo], knots[todo + 1]
-        checks = np.concatenate([lo + 0.25 * (hi - lo), lo + 0.75 * (hi - lo)])
+        checks = knots[todo] + CHECK_AT * (knots[todo + 1] - knots[todo])
         exact = source.packed(checks)
         approx = evaluate(knots, values, checks)
         # Per check point and signal, the error relative to the signal's scale.
@@ -180,7 +235,7 @@ def _refine(source: ReferenceSource, knots: np.ndarray, values: np.ndarray, eval
                 "the function "
                 "changes faster than that, or a derivative is not the rate of the one below "
                 "it. Give a smoother reference or consistent derivatives")
-        bad = np.unique(np.concatenate([todo[failing[:todo.size]], todo[failing[todo.size:]]]))
+        bad = todo[failing]
         mids = 0.5 * (knots[bad] + knots[bad + 1])
         new = np.concatenate([knots, mids])
         order = np.argsort(new, kind="stable")
