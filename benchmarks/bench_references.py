@@ -94,7 +94,7 @@ def _run_source(scenario):
 
 def evaluation_worker(scenarios: dict[str, str], duration: float, calls: int,
                       rounds: int) -> dict:
-    """Median microseconds per ``fill`` of each kind's run source, kinds alternated."""
+    """Microseconds per ``fill`` of each kind's run source, per round (kinds alternated)."""
     from aerial_drake.simulation.scenarios import load_scenario
 
     sources = {}
@@ -111,7 +111,7 @@ def evaluation_worker(scenarios: dict[str, str], duration: float, calls: int,
             for t in times:
                 fill(float(t), out)
             per_kind[kind].append(1e6 * (time.perf_counter() - start) / calls)
-    return {kind: statistics.median(v) for kind, v in per_kind.items()}
+    return per_kind
 
 
 def run_worker(name: str, duration: float) -> dict:
@@ -142,7 +142,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--duration", type=float, default=15.0)
-    parser.add_argument("--calls", type=int, default=3000)
+    parser.add_argument("--calls", type=int, default=1000,
+                        help="evaluations per kind and round (per-evaluation cost)")
+    parser.add_argument("--rounds", type=int, default=21,
+                        help="rounds of the per-evaluation cost, kinds alternated")
     parser.add_argument("--kinds", nargs="+", default=list(KINDS), choices=KINDS)
     parser.add_argument("--worker", help=argparse.SUPPRESS)
     parser.add_argument("--evaluate", help=argparse.SUPPRESS)
@@ -152,7 +155,7 @@ def main() -> None:
         return
     if args.evaluate:
         print(json.dumps(evaluation_worker(json.loads(args.evaluate), args.duration,
-                                           args.calls, 5)))
+                                           args.calls, args.rounds)))
         return
 
     print(f"machine: {platform.machine()}, {platform.platform()}, python "
@@ -166,10 +169,15 @@ def main() -> None:
                          "compile_kernels()")
         subprocess.run([sys.executable, "-c", compile_first], check=True)
         cost = _subprocess(["--evaluate", json.dumps(scenarios), "--duration",
-                            str(args.duration), "--calls", str(args.calls)], folder)
-        print(f"{'kind':>10} {'us per evaluation':>18} {'/ paper':>8}")
+                            str(args.duration), "--calls", str(args.calls), "--rounds",
+                            str(args.rounds)], folder)
+        print(f"per evaluation ({args.rounds} rounds of {args.calls} calls, kinds alternated)")
+        print(f"{'kind':>10} {'us per evaluation':>18} {'p10-p90':>12} {'/ paper':>8}")
+        paper_cost = statistics.median(cost["paper"])
         for kind in kinds:
-            print(f"{kind:>10} {cost[kind]:18.2f} {cost[kind] / cost['paper']:8.2f}")
+            lo, hi = _percentiles(cost[kind])
+            median = statistics.median(cost[kind])
+            print(f"{kind:>10} {median:18.2f} {lo:5.2f}-{hi:<6.2f} {median / paper_cost:8.2f}")
         runs: dict[str, list[dict]] = {k: [] for k in kinds}
         for _ in range(args.repeats):  # alternated: one run of each kind per round
             for kind in kinds:
