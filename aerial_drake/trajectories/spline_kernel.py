@@ -22,6 +22,8 @@ this about 1 us.
 from __future__ import annotations
 
 import math
+import os
+import sys
 
 import numba
 import numpy as np
@@ -298,7 +300,22 @@ def fill_spline_reference(data, layout, t, out):
 
 def compile_spline_reference() -> None:
     """Compile the kernel into numba's cache, or load it, for the argument types a run
-    passes (``simulation.runner.compile_kernels``)."""
+    passes; with a note on stderr when it compiles (the first waypoints or python reference
+    after installing: a few seconds). Called where such a reference is built, not by
+    ``simulation.runner.compile_kernels``, so the paper kind's first run does not pay it."""
+    if not fill_spline_reference.signatures and _cache_is_cold():
+        print("aerial_drake: compiling the reference kernel with numba (first waypoints or "
+              "python reference after installing; a few seconds, cached afterwards) ...",
+              file=sys.stderr, flush=True)
     vector = numba.types.Array(numba.types.float64, 1, "C")
     fill_spline_reference.compile(
         (vector, numba.types.Array(numba.types.int64, 1, "C"), numba.types.float64, vector))
+
+
+def _cache_is_cold() -> bool:
+    try:
+        # numba's internals (untyped), as control.compiled.law_cache_is_cold.
+        index = fill_spline_reference._cache._cache_file._index_path  # type: ignore[attr-defined]
+        return not os.path.exists(index)
+    except AttributeError:  # numba internals moved: no note
+        return False
