@@ -10,7 +10,8 @@ for the orientation's rotation vector. Local (a waypoint moves only its two segm
 at the waypoints, and with zero end velocities each segment is a monotone blend (no overshoot
 between rest points).
 
-Pure numpy; the evaluation is one small matrix product per call.
+Pure numpy; the evaluation is one small matrix product per call. A run evaluates these
+curves by the compiled :mod:`.spline_kernel` instead (equal to round-off).
 """
 
 from __future__ import annotations

@@ -18,6 +18,10 @@ field); the scenario's checks then test its derivatives numerically over the who
 user's code raises at load (importing the module, the call of no arguments, f(0)) is a
 ValueError naming ``python.function`` and the error; code that runs past
 :data:`LOAD_TIME_LIMIT` there is stopped (:mod:`.time_limit`) with the same.
+
+A run does not call the user's code at each controller sample: ``for_run`` samples it once
+onto compiled splines of the order the law needs, their error bound checked against it
+(:mod:`.sampled`).
 """
 
 from __future__ import annotations

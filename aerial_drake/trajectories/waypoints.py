@@ -31,6 +31,10 @@ only on both segments at a knot sharing them. A constant heading stays constant.
 
 Before the first waypoint and after the last the reference holds still (so their velocities
 must be zero, which :class:`~aerial_drake.trajectories.params.WaypointsParams` checks).
+
+Evaluated by the compiled :mod:`.spline_kernel` (about 1 us a call, against 35 us for the
+numpy code, which stays as :meth:`WaypointsReference.fill_interpreted`: the tests' oracle,
+equal to round-off).
 """
 
 from __future__ import annotations
