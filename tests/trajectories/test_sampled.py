@@ -116,6 +116,8 @@ def test_the_refusal_names_the_field_at_load(user_module):
     with pytest.raises(ScenarioError) as err:
         load_scenario(path, overrides={"duration": 1.0})
     assert err.value.field == "trajectory.python.function", str(err.value)
+    # Let through by the load-time smoothness check at 10 ms; refused by the splines' bound.
+    assert "sampled onto splines" in str(err.value) and "x_d" in str(err.value)
 
 
 def test_com_knots_are_coarse_enough_for_its_fourth_derivative():
