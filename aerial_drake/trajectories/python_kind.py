@@ -176,6 +176,7 @@ class _UserReference(ReferenceSource):
         if hit is not None and hit[0] is target:
             return hit[1]
         sampled = sample_onto_splines(self, duration, self.label)
+        self.__dict__.pop("_rows", None)  # the samples kept for it (packed) are in it now
         if len(_SAMPLED) >= _SAMPLED_KEPT:
             _SAMPLED.clear()
         _SAMPLED[key] = (target, sampled)
