@@ -17,6 +17,8 @@ BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
      ["nominal", "peak RSS"]),
     ("bench_law.py", ["--calls", "40", "--rounds", "2", "--duration", "0.05"],
      ["nominal (n = 7)", "quadrotor_ur3e (n = 6)", "kernel time quadrotor_ur3e / nominal"]),
+    ("bench_references.py", ["--repeats", "1", "--duration", "0.05", "--calls", "50"],
+     ["us per evaluation", "ratio to paper", "waypoints", "python"]),
     ("bench_study.py", ["--runs", "2", "--duration", "0.05", "--repeats", "1"],
      ["speed-up", "parallel efficiency", "per-run overhead", "peak RSS per worker"]),
 ])

@@ -60,7 +60,7 @@ from aerial_drake.simulation.disturbances import (
     bound_end_effector_windows,
     resolve_random_disturbances,
 )
-from aerial_drake.simulation.scenarios import Scenario
+from aerial_drake.simulation.scenarios import Scenario, ScenarioError
 from aerial_drake.simulation.sensing import add_state_sensor
 from aerial_drake.simulation.wind import add_wind
 from aerial_drake.trajectories.com_planning import planned_reference
@@ -255,8 +255,14 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
 
     # The run's reference, built once (its x_d planned here if trajectory.com_planning is on):
     # the checks, the start posture, the logs and Meshcat read this object (reference.source).
-    source = planned_reference(reference_of(scenario.trajectory, model.task_joint_nominal()),
-                               scenario.trajectory.com_planning, model, scenario.duration)
+    # A python kind's function is sampled once onto compiled splines here (for_run).
+    source = reference_of(scenario.trajectory, model.task_joint_nominal())
+    try:
+        source = source.for_run(scenario.duration)
+    except ValueError as err:
+        raise ScenarioError(f"trajectory: {err}", "trajectory.python.function") from None
+    source = planned_reference(source, scenario.trajectory.com_planning, model,
+                               scenario.duration)
     reference = builder.AddSystem(ReferenceGenerator(source))
     reference.set_name("reference")
     # Sampling: the paper's controller runs at 1 kHz and holds its command between samples

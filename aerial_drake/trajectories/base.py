@@ -29,6 +29,13 @@ class ReferenceSource:
         """The packed reference at time t (s) into ``out`` (size :attr:`size`)."""
         raise NotImplementedError
 
+    def for_run(self, duration: float) -> "ReferenceSource":
+        """The source a run over [0, ``duration``] (s) evaluates: this one, or (the python
+        kind) the same reference sampled once onto compiled splines, checked against it
+        (:mod:`aerial_drake.trajectories.sampled`; ValueError naming the signal if they
+        differ beyond its tolerance)."""
+        return self
+
     def packed(self, times: np.ndarray) -> np.ndarray:
         """The packed reference at each of the 1-D ``times`` (N, size)."""
         times = np.asarray(times, dtype=float)

@@ -10,7 +10,8 @@ for the orientation's rotation vector. Local (a waypoint moves only its two segm
 at the waypoints, and with zero end velocities each segment is a monotone blend (no overshoot
 between rest points).
 
-Pure numpy; the evaluation is one small matrix product per call.
+Pure numpy; the evaluation is one small matrix product per call. A run evaluates these
+curves by the compiled :mod:`.spline_kernel` instead (equal to round-off).
 """
 
 from __future__ import annotations
@@ -90,6 +91,27 @@ class PiecewiseHermite:
             hermite_segment(knots[i + 1] - knots[i], derivatives[i], derivatives[i + 1])
             for i in range(knots.size - 1)])
         return cls(knots, coefficients)
+
+    @classmethod
+    def through(cls, knots: np.ndarray, derivatives: np.ndarray) -> "PiecewiseHermite":
+        """The C^(m-1) curve through ``derivatives`` (N + 1, m, C) at the knots, as
+        :meth:`from_waypoints` but with no end at rest required (a sampled curve)."""
+        derivatives = np.asarray(derivatives, dtype=float)
+        return cls.from_segment_ends(knots, derivatives[:-1], derivatives[1:])
+
+    @classmethod
+    def from_segment_ends(cls, knots: np.ndarray, starts: np.ndarray, ends: np.ndarray
+                          ) -> "PiecewiseHermite":
+        """Segment i matching ``starts[i]`` (m, C) at knot i and ``ends[i]`` at knot i + 1:
+        :func:`hermite_segment` for all segments at once."""
+        knots = np.asarray(knots, dtype=float)
+        starts, ends = np.asarray(starts, dtype=float), np.asarray(ends, dtype=float)
+        m = starts.shape[1]
+        degree = 2 * m - 1
+        A = np.vstack([_basis(0.0, degree, m), _basis(1.0, degree, m)])
+        scale = np.diff(knots)[:, None, None] ** np.arange(m)[None, :, None]
+        rhs = np.concatenate([starts * scale, ends * scale], axis=1)
+        return cls(knots, np.linalg.solve(A, rhs))
 
     def segment(self, t: float) -> tuple[int, float]:
         """(segment index, tau) at time t; tau clamped to [0, 1] outside the knots."""

@@ -18,6 +18,10 @@ field); the scenario's checks then test its derivatives numerically over the who
 user's code raises at load (importing the module, the call of no arguments, f(0)) is a
 ValueError naming ``python.function`` and the error; code that runs past
 :data:`LOAD_TIME_LIMIT` there is stopped (:mod:`.time_limit`) with the same.
+
+A run does not call the user's code at each controller sample: ``for_run`` samples it once
+onto compiled splines of the order the law needs, their error bound checked against it
+(:mod:`.sampled`).
 """
 
 from __future__ import annotations
@@ -34,6 +38,7 @@ from aerial_drake.trajectories.base import ReferenceSource
 from aerial_drake.trajectories.heading import heading_reference
 from aerial_drake.trajectories.params import PythonParams
 from aerial_drake.trajectories.reference import ReferenceSample
+from aerial_drake.trajectories.sampled import sample_onto_splines
 from aerial_drake.trajectories.so3 import exp_so3, rotation_vector_rates
 from aerial_drake.trajectories.time_limit import TimeLimitExceeded, time_limit
 
@@ -107,7 +112,7 @@ def python_reference(params: PythonParams, joint_targets: np.ndarray) -> Referen
 def _load(params: PythonParams, joint_targets: np.ndarray) -> ReferenceSource:
     target = resolve_python_reference(params)
     joint_targets = np.asarray(joint_targets, dtype=float)
-    source: ReferenceSource
+    source: _UserReference
     if isinstance(target, dict):
         source = DrakeTrajectoriesReference(target, joint_targets)
     elif callable(target):
@@ -116,6 +121,7 @@ def _load(params: PythonParams, joint_targets: np.ndarray) -> ReferenceSource:
         raise ValueError(f"Invalid python: 'python.function' {params.function!r} is a "
                          f"{type(target).__name__}: give a function f(t) -> ReferenceSample "
                          "or a dict of Drake trajectories (docs/trajectories.md)")
+    source.label = params.function
     try:
         source.evaluate(0.0)
     except ValueError as err:  # a wrong shape (named by fill), or the user's own ValueError
@@ -127,14 +133,71 @@ def _load(params: PythonParams, joint_targets: np.ndarray) -> ReferenceSource:
     return source
 
 
-class PythonReference(ReferenceSource):
-    """A function f(t) -> ReferenceSample, each result's shapes checked."""
+class _UserReference(ReferenceSource):
+    """The user's reference, called per evaluation; a run evaluates it sampled onto splines
+    (:meth:`for_run`)."""
 
     kind = "python"
+    #: ``python.function``, for the messages.
+    label = "?"
+    #: The joint targets the reference falls back on (part of the sampled splines' key).
+    _targets: np.ndarray
+
+    def _target(self) -> Any:
+        """The user's object this reference calls (what the sampled splines are cached by)."""
+        raise NotImplementedError
+
+    def packed(self, times: np.ndarray) -> np.ndarray:
+        """As :meth:`ReferenceSource.packed`, each time's row kept: the load-time check's
+        samples (10 ms apart) hold the splines' knots (20 ms apart), which are not asked of
+        the function again."""
+        times = np.asarray(times, dtype=float)
+        if times.ndim != 1:
+            raise ValueError(f"times must be a 1-D array, got shape {times.shape}")
+        memo = self.__dict__.setdefault("_rows", {})
+        out = np.empty((times.size, self.size))
+        for i, t in enumerate(times.tolist()):
+            row = memo.get(t)
+            if row is None:
+                self.fill(t, out[i])
+                memo[t] = out[i].copy()
+            else:
+                out[i] = row
+        return out
+
+    def for_run(self, duration: float) -> ReferenceSource:
+        """Sampled once over [0, ``duration``] onto compiled splines of the order the law
+        needs, checked against this reference (:func:`.sampled.sample_onto_splines`). Kept
+        for the same function object, duration and joint targets within the process (the
+        load-time check and the run, a study's runs), so the function is sampled once."""
+        target = self._target()
+        key = (id(target), float(duration), self._targets.tobytes())
+        hit = _SAMPLED.get(key)
+        if hit is not None and hit[0] is target:
+            return hit[1]
+        sampled = sample_onto_splines(self, duration, self.label)
+        self.__dict__.pop("_rows", None)  # the samples kept for it (packed) are in it now
+        if len(_SAMPLED) >= _SAMPLED_KEPT:
+            _SAMPLED.clear()
+        _SAMPLED[key] = (target, sampled)
+        return sampled
+
+
+#: The sampled references kept (:meth:`_UserReference.for_run`), at most _SAMPLED_KEPT.
+_SAMPLED: dict[tuple, tuple[Any, ReferenceSource]] = {}
+_SAMPLED_KEPT = 8
+
+
+class PythonReference(_UserReference):
+    """A function f(t) -> ReferenceSample, each result's shapes checked."""
 
     def __init__(self, function: Callable[[float], ReferenceSample], n_joints: int) -> None:
         super().__init__(n_joints)
         self._function = function
+        self._targets = np.zeros(0)  # the function gives its own q_jd
+
+    def _target(self) -> Any:
+        return self._function
 
     def fill(self, t: float, out: np.ndarray) -> None:
         sample = self._function(t)
@@ -152,10 +215,8 @@ class PythonReference(ReferenceSource):
         out[:] = np.concatenate(sample.to_vectors())
 
 
-class DrakeTrajectoriesReference(ReferenceSource):
+class DrakeTrajectoriesReference(_UserReference):
     """A dict of Drake trajectories (module docstring)."""
-
-    kind = "python"
 
     def __init__(self, trajectories: dict[str, Any], joint_targets: np.ndarray) -> None:
         super().__init__(joint_targets.size)
@@ -175,7 +236,10 @@ class DrakeTrajectoriesReference(ReferenceSource):
                 raise ValueError(f"'{key}' is {trajectory.rows()} x {trajectory.cols()}, "
                                  f"expected {rows} x 1")
         self._trajectories = trajectories
-        self._joint_targets = joint_targets
+        self._joint_targets = self._targets = np.asarray(joint_targets, dtype=float)
+
+    def _target(self) -> Any:
+        return self._trajectories
 
     def _derivatives(self, key: str, t: float, orders: int) -> np.ndarray | None:
         trajectory = self._trajectories.get(key)

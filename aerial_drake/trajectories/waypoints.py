@@ -31,6 +31,10 @@ only on both segments at a knot sharing them. A constant heading stays constant.
 
 Before the first waypoint and after the last the reference holds still (so their velocities
 must be zero, which :class:`~aerial_drake.trajectories.params.WaypointsParams` checks).
+
+Evaluated by the compiled :mod:`.spline_kernel` (about 1 us a call, against 35 us for the
+numpy code, which stays as :meth:`WaypointsReference.fill_interpreted`: the tests' oracle,
+equal to round-off).
 """
 
 from __future__ import annotations
@@ -56,6 +60,11 @@ from aerial_drake.trajectories.so3 import (
     rotation_vector_acceleration,
     rotation_vector_rates,
     rotation_vector_velocity,
+)
+from aerial_drake.trajectories.spline_kernel import (
+    compile_spline_reference,
+    fill_spline_reference,
+    pack_spline_reference,
 )
 from aerial_drake.trajectories.through import knot_rotation_rates, through_derivatives
 
@@ -123,6 +132,11 @@ class WaypointsReference(ReferenceSource):
         self._bases, self._orientation = self._orientation_segments(points)
         self._at = TaskReferenceLayout.of(self.n_joints)
         self._task_end = COM_REFERENCE_SIZE + task_reference_size(self.n_joints)
+        compile_spline_reference()  # here, not at the first fill inside a run
+        self._data, self._layout = pack_spline_reference(
+            self.n_joints, self._position, self._heading, False, self._com, self._com_offset,
+            self._joints, self._joint_targets, self._orientation, self._bases,
+            self._axis_terms)
 
     def _curve(self, values: np.ndarray, given: list) -> PiecewiseHermite:
         """The C^4 curve through ``values`` (N, C) with each waypoint's given velocity (an
@@ -213,6 +227,11 @@ class WaypointsReference(ReferenceSource):
         return np.array(rotations[:-1]), PiecewiseHermite(self.times, np.array(coefficients))
 
     def fill(self, t: float, out: np.ndarray) -> None:
+        fill_spline_reference(self._data, self._layout, float(t), out)
+
+    def fill_interpreted(self, t: float, out: np.ndarray) -> None:
+        """:meth:`fill` in numpy (the compiled kernel's oracle in the tests; equal to
+        round-off)."""
         P = self._position.evaluate(t, _C4)
         phi = self._heading.evaluate(t, _C4)[:, 0]
         heading, offset = heading_and_offset(phi, self._com_offset)

@@ -66,6 +66,15 @@ def check_trajectory(scenario: Any, joint_nominal: np.ndarray) -> None:
             "derivative must be the rate of the one below it and continuous (x_d to the 4th, "
             "p_ed, R_ed via w_ed, dw_ed and q_jd to the 2nd, b1d to the 2nd)",
             "trajectory.python.function")
+    try:  # what a run flies: the function sampled onto splines, their error bound checked
+        with time_limit(SAMPLING_TIME_LIMIT, f"python.function {function!r}"):
+            source.for_run(scenario.duration)
+    except TimeLimitExceeded:
+        raise ScenarioError(f"trajectory: python.function {function!r} did not finish "
+                            f"sampling onto splines within {SAMPLING_TIME_LIMIT:g} s: make f(t) "
+                            "return promptly", "trajectory.python.function") from None
+    except ValueError as err:
+        raise ScenarioError(f"trajectory: {err}", "trajectory.python.function") from None
 
 
 def resolve_python_path(scenario: Any, path: Path) -> Any:
