@@ -19,8 +19,10 @@ BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
      ["nominal (n = 7)", "quadrotor_ur3e (n = 6)", "kernel time quadrotor_ur3e / nominal"]),
     ("bench_references.py", ["--repeats", "1", "--duration", "0.05", "--calls", "50"],
      ["us per evaluation", "ratio to paper", "waypoints", "python"]),
-    ("bench_study.py", ["--runs", "2", "--duration", "0.05", "--repeats", "1"],
-     ["speed-up", "parallel efficiency", "per-run overhead", "peak RSS per worker"]),
+    ("bench_study.py", ["--runs", "2", "--duration", "0.05", "--repeats", "1", "--workers",
+                        "1", "2", "--memory-runs", "12", "--memory-duration", "0.05"],
+     ["speed-up", "parallel efficiency", "per-run overhead", "peak RSS per worker",
+      "runs per minute per worker", "10,000-run study", "growth"]),
 ])
 def test_benchmark_runs(script, args, expected):
     done = subprocess.run([sys.executable, str(BENCHMARKS / script), *args],
