@@ -41,6 +41,7 @@ from pydrake.systems.primitives import (
     VectorLogSink,
 )
 
+from aerial_drake.control.base import ControllerBase
 from aerial_drake.control.controller import DecoupledController
 from aerial_drake.control.interface import check_controller_ports
 from aerial_drake.control.limits import command_limits
@@ -272,6 +273,11 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
     for port in ("com_reference", "task_reference", "heading_reference"):
         builder.Connect(reference.GetOutputPort(port), controller.GetInputPort(port))
         outputs[port] = reference.GetOutputPort(port)
+    if isinstance(controller, ControllerBase):
+        # Its ports are the generator's, which outputs source.fill at the context's time: the
+        # controller evaluates the source itself at each sample, the same doubles without a
+        # Python callback and three port evaluations per sample (docs/performance.md).
+        controller.read_references_from(source)
 
     state_out = plant.get_state_output_port()
     model_state = state_out
