@@ -31,6 +31,8 @@ from pathlib import Path
 import numpy as np
 
 PINOCCHIO = "Pinocchio rigid-body calls"
+RIGID_BODY = "the law's rigid-body part"
+SECTION_II = "the law's Section II"
 #: Where the Pinocchio model of a Drake plant is built (shared with the oracle tests).
 TESTS = Path(__file__).resolve().parent.parent / "tests"
 
@@ -100,6 +102,45 @@ def pinocchio_calls(controller, inputs):
     return rigid_body_quantities, states
 
 
+def law_phases(controller):
+    """Two callables on the law's inputs: the compiled law's rigid-body part (kinematics and
+    the body sums: M, C, every body's Jacobian and its derivative, J_g, J_g_dot, the CoM) and
+    its Section II (that and the transformation (3)-(4): T, T^-1, N, N_dot), run alone with
+    the law's own kernels in its workspace (the law's arithmetic; the outputs discarded)."""
+    from numba import njit
+
+    from aerial_drake.control.compiled.kernels import (
+        _body_sums,
+        _law_buffers,
+        _transformation,
+        _unpack_law,
+    )
+    from aerial_drake.control.compiled.kinematics import _kinematics
+
+    @njit(cache=True, nogil=True, error_model="numpy")
+    def phase(x, model, index, work, section2):
+        tree, p = _unpack_law(model, index)
+        nv = tree.reflected.shape[0]
+        s, _, _ = _law_buffers(work, tree.parent.shape[0], nv)
+        q, v = x[:p.nq], x[p.nq:]
+        _kinematics(q, tree, s)
+        m, base = _body_sums(v, tree, s)
+        if section2:
+            _transformation(v, s.R_all[base], s)
+        return m
+
+    law = controller._compiled
+    work = np.zeros_like(law._work)  # not the law's: its buffers stay as the law left them
+
+    def rigid_body_part(x, com, task, heading):
+        phase(x, law._model, law._index, work, False)
+
+    def section_ii(x, com, task, heading):
+        phase(x, law._model, law._index, work, True)
+
+    return rigid_body_part, section_ii
+
+
 def _load() -> str:
     return " ".join(f"{x:.2f}" for x in os.getloadavg())
 
@@ -134,18 +175,22 @@ def main() -> None:
         def kernel(x, com, task, heading, law=law, command=command, diagnostics=diagnostics):
             law(x, com, task, heading, command, diagnostics)
 
-        subjects[name] = (controller, inputs, kernel, pinocchio_calls(controller, inputs))
+        subjects[name] = (controller, inputs, kernel, pinocchio_calls(controller, inputs),
+                          law_phases(controller))
 
     print(f"machine: {platform.machine()}, {platform.processor() or platform.platform()}, "
           f"python {platform.python_version()}, load average {_load()}")
     per_round = max(args.calls // args.rounds, 20)
-    kinds = ("CompiledLaw.__call__", "DecoupledController.evaluate", PINOCCHIO)
+    kinds = ("CompiledLaw.__call__", "DecoupledController.evaluate", RIGID_BODY, SECTION_II,
+             PINOCCHIO)
     times: dict = {(name, kind): [] for name in subjects for kind in kinds}
     for _ in range(args.rounds):  # interleaved: each robot and each subject in every round
-        for name, (controller, inputs, kernel, pin_calls) in subjects.items():
+        for name, (controller, inputs, kernel, pin_calls, phases) in subjects.items():
             for kind, evaluate, on in (("CompiledLaw.__call__", kernel, inputs),
                                        ("DecoupledController.evaluate", controller.evaluate,
                                         inputs),
+                                       (RIGID_BODY, phases[0], inputs),
+                                       (SECTION_II, phases[1], inputs),
                                        (PINOCCHIO, *(pin_calls or (None, None)))):
                 if evaluate is not None:
                     times[name, kind].append(1e6 * time_calls(evaluate, on, per_round))
@@ -169,13 +214,15 @@ def main() -> None:
             print(f"{name}: law / Pinocchio not measured: Pinocchio (pip package 'pin', in the "
                   "test extra) is not installed")
             continue
-        law_chunks = times[name, "CompiledLaw.__call__"]
-        # The ratio of the medians, and its spread over the rounds (each round's two medians).
-        ratio = np.median(np.concatenate(law_chunks)) / np.median(np.concatenate(pin_chunks))
-        per_round_ratio = [np.median(a) / np.median(b) for a, b in zip(law_chunks, pin_chunks)]
-        print(f"{name}: law / Pinocchio's rigid-body calls: {ratio:.2f} (per round "
-              f"{np.percentile(per_round_ratio, 10):.2f}-{np.percentile(per_round_ratio, 90):.2f}, "
-              f"10th-90th percentile)")
+        for kind, what in (("CompiledLaw.__call__", "law"),
+                           (RIGID_BODY, "the law's rigid-body part")):
+            law_chunks = times[name, kind]
+            # The ratio of the medians, and its spread over the rounds (each round's medians).
+            ratio = np.median(np.concatenate(law_chunks)) / np.median(np.concatenate(pin_chunks))
+            per_round = [np.median(a) / np.median(b) for a, b in zip(law_chunks, pin_chunks)]
+            print(f"{name}: {what} / Pinocchio's rigid-body calls: {ratio:.2f} (per round "
+                  f"{np.percentile(per_round, 10):.2f}-{np.percentile(per_round, 90):.2f}, "
+                  "10th-90th percentile)")
     print(f"load average after: {_load()}")
 
 
