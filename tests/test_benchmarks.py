@@ -14,9 +14,10 @@ BENCHMARKS = Path(__file__).resolve().parent.parent / "benchmarks"
     ("bench_plant.py", ["--repeats", "1", "--duration", "0.05"], ["rigid", "rotors"]),
     ("bench_decomposition.py", ["--repeats", "20"], ["compiled", "ratio"]),
     ("bench_sim.py", ["--repeats", "1", "--duration", "0.05", "--scenarios", "nominal"],
-     ["nominal", "peak RSS"]),
+     ["nominal", "peak RSS", "loop/plant", "load average"]),
     ("bench_law.py", ["--calls", "40", "--rounds", "2", "--duration", "0.05"],
-     ["nominal (n = 7)", "quadrotor_ur3e (n = 6)", "kernel time quadrotor_ur3e / nominal"]),
+     ["nominal (n = 7)", "quadrotor_ur3e (n = 6)", "kernel time quadrotor_ur3e / nominal",
+      "the law's rigid-body part", "the law's Section II", "nominal: law / Pinocchio"]),
     ("bench_study.py", ["--runs", "2", "--duration", "0.05", "--repeats", "1"],
      ["speed-up", "parallel efficiency", "per-run overhead", "peak RSS per worker"]),
 ])
