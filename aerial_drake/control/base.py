@@ -199,7 +199,9 @@ def _define(T):
             generator's output is ``source.fill`` at the context's time, so the law sees the
             same doubles, without the generator's Python callback and three input
             evaluations at every sample (about a tenth of the closed loop's overhead over the
-            plant, docs/performance.md). The ports stay connected for other readers.
+            plant, docs/performance.md). The ports stay connected for other readers. The
+            three arrays the law then receives are views of one buffer, refilled at each
+            evaluation: a controller that keeps a reference across samples copies it.
             """
             if source is None:
                 self._reference = None
