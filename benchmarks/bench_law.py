@@ -8,6 +8,12 @@ through ``DecoupledController.evaluate`` (which adds the output arrays and the s
 One scenario per shipped robot by default, the robots alternating in rounds so their ratio
 holds while the machine's speed drifts.
 
+With Pinocchio installed (pip package ``pin``, in the test extra), the same rounds also time
+Pinocchio computing, on the same states, the rigid-body quantities the law computes for itself
+(:func:`pinocchio_calls`), and print law / Pinocchio per robot. Pinocchio's model is the one the
+tests hold the law against (``tests/paper_oracles.PinocchioModel``, built from the Drake plant's
+parameters).
+
 The machine's speed drifts: compare two versions of the law in one process, alternating
 (e.g. with this script's ``time_calls`` on both), not across runs.
 """
@@ -15,10 +21,20 @@ The machine's speed drifts: compare two versions of the law in one process, alte
 from __future__ import annotations
 
 import argparse
+import importlib.util
+import os
 import platform
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
+
+PINOCCHIO = "Pinocchio rigid-body calls"
+RIGID_BODY = "the law's rigid-body part"
+SECTION_II = "the law's Section II"
+#: Where the Pinocchio model of a Drake plant is built (shared with the oracle tests).
+TESTS = Path(__file__).resolve().parent.parent / "tests"
 
 
 def logged_inputs(scenario_name: str, duration: float, rows: int = 300):
@@ -35,6 +51,98 @@ def logged_inputs(scenario_name: str, duration: float, rows: int = 300):
     inputs = [(np.ascontiguousarray(log["plant_state"][k][idx]), log["com_reference"][k],
                log["task_reference"][k], log["heading_reference"][k]) for k in picks]
     return loop.controller, inputs
+
+
+def pinocchio_calls(controller, inputs):
+    """Pinocchio computing what the law computes of rigid-body dynamics, as one callable on
+    the law's inputs, and the inputs in Pinocchio's coordinates; None without Pinocchio.
+
+    The same quantities: the mass matrix M (``crba``), the Christoffel-consistent Coriolis
+    matrix C (``computeCoriolisMatrix``), every body's Jacobian and its time derivative
+    (``computeJointJacobiansTimeVariation``), the end-effector frame's pose, World-aligned
+    Jacobian and its derivative (``updateFramePlacements``, ``getFrameJacobian``,
+    ``getFrameJacobianTimeVariation``), and the CoM, its Jacobian J_g and J_g_dot (the linear
+    rows of the centroidal map and its derivative, over the mass:
+    ``computeCentroidalMapTimeVariation``). Not the generalized gravity (the law never forms
+    it: gravity enters (10) at the CoM). Not timed: Drake's state to Pinocchio's (done once per
+    state here) and the velocity map between the two libraries' base velocities; the law does
+    everything else on top (Section II's T, T^-1, N, N_dot and the law (10)-(22)).
+    """
+    if importlib.util.find_spec("pinocchio") is None:
+        return None
+    import pinocchio as pin
+    from pydrake.common.eigen_geometry import Quaternion
+
+    sys.path.insert(0, str(TESTS))
+    from paper_oracles import PinocchioModel
+
+    plant, frame = controller._plant, controller._frame
+    pm = PinocchioModel(plant, controller._dynamics.base_body)
+    fid = pm.add_frame("end_effector", frame.body(), frame.GetFixedPoseInBodyFrame())
+    model, data = pm.model, pm.data
+    nq = plant.num_positions()
+    world_aligned = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+    def rigid_body_quantities(q, v):
+        pin.crba(model, data, q)
+        pin.computeCoriolisMatrix(model, data, q, v)
+        pin.computeJointJacobiansTimeVariation(model, data, q, v)
+        pin.updateFramePlacements(model, data)
+        pin.getFrameJacobian(model, data, fid, world_aligned)
+        pin.getFrameJacobianTimeVariation(model, data, fid, world_aligned)
+        pin.computeCentroidalMapTimeVariation(model, data, q, v)
+
+    # Pinocchio's configuration and velocity from Drake's (v_drake = S v_pin), once per state.
+    states = []
+    for x, *_ in inputs:
+        q_drake, v_drake = x[:nq], x[nq:]
+        R = Quaternion(q_drake[:4] / np.linalg.norm(q_drake[:4])).rotation()
+        S, _ = pm.velocity_map(R, R.T @ v_drake[0:3])
+        states.append((pm.configuration(q_drake), np.linalg.solve(S, v_drake)))
+    return rigid_body_quantities, states
+
+
+def law_phases(controller):
+    """Two callables on the law's inputs: the compiled law's rigid-body part (kinematics and
+    the body sums: M, C, every body's Jacobian and its derivative, J_g, J_g_dot, the CoM) and
+    its Section II (that and the transformation (3)-(4): T, T^-1, N, N_dot), run alone with
+    the law's own kernels in its workspace (the law's arithmetic; the outputs discarded)."""
+    from numba import njit
+
+    from aerial_drake.control.compiled.kernels import (
+        _body_sums,
+        _law_buffers,
+        _transformation,
+        _unpack_law,
+    )
+    from aerial_drake.control.compiled.kinematics import _kinematics
+
+    @njit(cache=True, nogil=True, error_model="numpy")
+    def phase(x, model, index, work, section2):
+        tree, p = _unpack_law(model, index)
+        nv = tree.reflected.shape[0]
+        s, _, _ = _law_buffers(work, tree.parent.shape[0], nv)
+        q, v = x[:p.nq], x[p.nq:]
+        _kinematics(q, tree, s)
+        m, base = _body_sums(v, tree, s)
+        if section2:
+            _transformation(v, s.R_all[base], s)
+        return m
+
+    law = controller._compiled
+    work = np.zeros_like(law._work)  # not the law's: its buffers stay as the law left them
+
+    def rigid_body_part(x, com, task, heading):
+        phase(x, law._model, law._index, work, False)
+
+    def section_ii(x, com, task, heading):
+        phase(x, law._model, law._index, work, True)
+
+    return rigid_body_part, section_ii
+
+
+def _load() -> str:
+    return " ".join(f"{x:.2f}" for x in os.getloadavg())
 
 
 def time_calls(evaluate, inputs, calls: int, block: int = 20) -> np.ndarray:
@@ -67,19 +175,28 @@ def main() -> None:
         def kernel(x, com, task, heading, law=law, command=command, diagnostics=diagnostics):
             law(x, com, task, heading, command, diagnostics)
 
-        subjects[name] = (controller, inputs, kernel)
+        subjects[name] = (controller, inputs, kernel, pinocchio_calls(controller, inputs),
+                          law_phases(controller))
 
     print(f"machine: {platform.machine()}, {platform.processor() or platform.platform()}, "
-          f"python {platform.python_version()}")
+          f"python {platform.python_version()}, load average {_load()}")
     per_round = max(args.calls // args.rounds, 20)
-    times: dict = {(name, kind): [] for name in subjects
-                   for kind in ("CompiledLaw.__call__", "DecoupledController.evaluate")}
-    for _ in range(args.rounds):  # interleaved: each robot in every round
-        for name, (controller, inputs, kernel) in subjects.items():
-            for kind, evaluate in (("CompiledLaw.__call__", kernel),
-                                   ("DecoupledController.evaluate", controller.evaluate)):
-                times[name, kind].append(1e6 * time_calls(evaluate, inputs, per_round))
+    kinds = ("CompiledLaw.__call__", "DecoupledController.evaluate", RIGID_BODY, SECTION_II,
+             PINOCCHIO)
+    times: dict = {(name, kind): [] for name in subjects for kind in kinds}
+    for _ in range(args.rounds):  # interleaved: each robot and each subject in every round
+        for name, (controller, inputs, kernel, pin_calls, phases) in subjects.items():
+            for kind, evaluate, on in (("CompiledLaw.__call__", kernel, inputs),
+                                       ("DecoupledController.evaluate", controller.evaluate,
+                                        inputs),
+                                       (RIGID_BODY, phases[0], inputs),
+                                       (SECTION_II, phases[1], inputs),
+                                       (PINOCCHIO, *(pin_calls or (None, None)))):
+                if evaluate is not None:
+                    times[name, kind].append(1e6 * time_calls(evaluate, on, per_round))
     for (name, kind), chunks in times.items():
+        if not chunks:
+            continue
         t = np.concatenate(chunks)
         controller = subjects[name][0]
         print(f"{name} (n = {controller._n}): {kind}: median {np.median(t):.1f} us, "
@@ -91,6 +208,22 @@ def main() -> None:
         for name in list(subjects)[1:]:
             other = np.median(np.concatenate(times[name, "CompiledLaw.__call__"]))
             print(f"kernel time {name} / {first}: {other / base:.3f}")
+    for name in subjects:
+        pin_chunks = times[name, PINOCCHIO]
+        if not pin_chunks:
+            print(f"{name}: law / Pinocchio not measured: Pinocchio (pip package 'pin', in the "
+                  "test extra) is not installed")
+            continue
+        for kind, what in (("CompiledLaw.__call__", "law"),
+                           (RIGID_BODY, "the law's rigid-body part")):
+            law_chunks = times[name, kind]
+            # The ratio of the medians, and its spread over the rounds (each round's medians).
+            ratio = np.median(np.concatenate(law_chunks)) / np.median(np.concatenate(pin_chunks))
+            per_round = [np.median(a) / np.median(b) for a, b in zip(law_chunks, pin_chunks)]
+            print(f"{name}: {what} / Pinocchio's rigid-body calls: {ratio:.2f} (per round "
+                  f"{np.percentile(per_round, 10):.2f}-{np.percentile(per_round, 90):.2f}, "
+                  "10th-90th percentile)")
+    print(f"load average after: {_load()}")
 
 
 if __name__ == "__main__":

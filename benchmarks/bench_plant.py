@@ -29,19 +29,29 @@ SCENARIOS = {"rigid": "nominal", "rotors": "disturbed"}
 
 def step_time(variant: str, duration: float) -> float:
     """Wall time per 1 ms step (s) of the plant alone over ``duration`` simulated seconds."""
-    scenario = load_scenario(SCENARIOS[variant])
+    return plant_alone(load_scenario(SCENARIOS[variant]), duration, variant)[0]
+
+
+def plant_alone(scenario, duration: float, variant: str | None = None) -> tuple[float, float]:
+    """Wall time per step (s) and in all (s) of ``scenario``'s simulated plant alone (its
+    plant variant unless ``variant`` is given, its robot, plant config and environment, and its
+    simulator settings) over ``duration`` simulated seconds, zero inputs, nothing else but
+    the SceneGraph it is registered with: the floor under the closed loop of that scenario."""
     builder = DiagramBuilder()
-    sim = add_to_builder(builder, variant, time_step=0.0)
+    sim = add_to_builder(builder, variant or scenario.plant_variant,
+                         robot=scenario.robot_description(), plant_config=scenario.plant,
+                         environment=scenario.environment.model_directives(),
+                         environment_packages=scenario.environment.packages)
     plant = sim.plant
     zero = builder.AddSystem(ConstantVectorSource(np.zeros(plant.num_actuated_dofs())))
     builder.Connect(zero.get_output_port(), plant.get_actuation_input_port())
     simulator = Simulator(builder.Build())
     ApplySimulatorConfig(scenario.simulator, simulator)
-    simulator.Initialize()
     start = time.perf_counter()
+    simulator.Initialize()
     simulator.AdvanceTo(duration)
     wall = time.perf_counter() - start
-    return wall / simulator.get_num_steps_taken()
+    return wall / simulator.get_num_steps_taken(), wall
 
 
 def main() -> None:

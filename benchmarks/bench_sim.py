@@ -2,8 +2,12 @@
 
 For each scenario: median wall time over --repeats runs, real-time factor (simulated / wall),
 median control-law evaluation time (the controller replayed on the run's logged states), the
-same diagram with a zero controller (plant, reference and logging only) timed in the same
-session, their ratio, and the peak resident memory of one run. Each run is its own process,
+same diagram with a zero controller (plant, reference and logging only) and the scenario's
+simulated plant alone (``bench_plant.plant_alone``: the plant variant, robot and simulator
+settings of the scenario, zero inputs, no other system) timed in the same session, the ratios
+closed loop / zero controller and closed loop / plant alone (median and 10th-90th percentile
+of the ratio of each run to its neighbour in the alternation), and the peak resident memory of
+one run. Each run is its own process,
 so the memory figure is that run's. The numba kernels are compiled (or loaded) first, in a
 process of their own, so every timed run is one with numba's cache filled; the first run
 after installing is measured apart (docs/performance.md, Memory).
@@ -15,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import platform
 import resource
 import statistics
@@ -25,12 +30,16 @@ import time
 import numpy as np
 
 
-def worker(scenario_name: str, duration: float, zero: bool) -> dict:
+def worker(scenario_name: str, duration: float, zero: bool, plant: bool = False) -> dict:
     from aerial_drake.control.registry import zero_controller
     from aerial_drake.simulation.runner import run_scenario
     from aerial_drake.simulation.scenarios import load_scenario
 
     scenario = load_scenario(scenario_name, overrides={"duration": duration})
+    if plant:
+        from bench_plant import plant_alone
+
+        return {"wall_s": plant_alone(scenario, duration)[1]}
     result = run_scenario(scenario, progress=False,
                           controller_factory=zero_controller if zero else None)
     out = {"wall_s": result.wall_time_s,
@@ -61,12 +70,18 @@ def _controller_time(scenario, result, samples: int = 1000) -> float:
     return 1e6 * statistics.median(times)
 
 
-def run_worker(name: str, duration: float, zero: bool) -> dict:
+def run_worker(name: str, duration: float, zero: bool, plant: bool = False) -> dict:
     cmd = [sys.executable, __file__, "--worker", name, "--duration", str(duration)]
     if zero:
         cmd.append("--zero")
+    if plant:
+        cmd.append("--plant")
     done = subprocess.run(cmd, check=True, capture_output=True, text=True)
     return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def _load() -> str:
+    return " ".join(f"{x:.2f}" for x in os.getloadavg())
 
 
 def main() -> None:
@@ -76,31 +91,40 @@ def main() -> None:
     parser.add_argument("--scenarios", nargs="+", default=["nominal", "disturbed"])
     parser.add_argument("--worker", help=argparse.SUPPRESS)
     parser.add_argument("--zero", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--plant", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.worker:
-        print(json.dumps(worker(args.worker, args.duration, args.zero)))
+        print(json.dumps(worker(args.worker, args.duration, args.zero, args.plant)))
         return
 
     print(f"machine: {platform.machine()}, {platform.platform()}, python "
-          f"{platform.python_version()}, {len(__import__('os').sched_getaffinity(0))} cores")
+          f"{platform.python_version()}, {len(os.sched_getaffinity(0))} cores")
     header = (f"{'scenario':>10} {'wall (s)':>9} {'RT factor':>10} {'ctrl (us)':>10} "
-              f"{'zero-ctrl wall':>15} {'ratio':>6} {'peak RSS (MB)':>14}")
+              f"{'zero-ctrl wall':>15} {'ratio':>6} {'plant wall':>11} "
+              f"{'loop/plant (p10-p90)':>21} {'peak RSS (MB)':>14}")
     compile_first = "from aerial_drake.simulation.runner import compile_kernels; compile_kernels()"
     subprocess.run([sys.executable, "-c", compile_first], check=True)
+    print(f"load average before: {_load()}")
     print(header)
     for name in args.scenarios:
-        # Alternating, so that both medians see the same drift of the machine's speed.
-        full, zero = [], []
+        # Alternating, so that the medians see the same drift of the machine's speed; each
+        # ratio is of runs next to each other in time.
+        full, zero, plant = [], [], []
         for _ in range(args.repeats):
             full.append(run_worker(name, args.duration, False))
             zero.append(run_worker(name, args.duration, True))
+            plant.append(run_worker(name, args.duration, False, plant=True))
         wall = statistics.median(r["wall_s"] for r in full)
         zwall = statistics.median(r["wall_s"] for r in zero)
+        pwall = statistics.median(r["wall_s"] for r in plant)
+        ratios = [f["wall_s"] / p["wall_s"] for f, p in zip(full, plant)]
+        spread = f"{statistics.median(ratios):.2f} ({np.percentile(ratios, 10):.2f}-" \
+                 f"{np.percentile(ratios, 90):.2f})"
         print(f"{name:>10} {wall:9.2f} {args.duration / wall:10.2f} "
               f"{statistics.median(r['controller_us'] for r in full):10.1f} "
-              f"{zwall:15.2f} {wall / zwall:6.2f} "
+              f"{zwall:15.2f} {wall / zwall:6.2f} {pwall:11.2f} {spread:>21} "
               f"{max(r['peak_rss_mb'] for r in full):14.0f}", flush=True)
-
+    print(f"load average after: {_load()}")
 
 if __name__ == "__main__":
     main()

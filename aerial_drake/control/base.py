@@ -87,6 +87,9 @@ def _define(T):
             self._period = float(period)
             self._scalar = float if T is float else object
             self.evaluations = 0  # number of control law evaluations (tests, metrics.json)
+            # (fill, buffer, com, task, heading) when the references are read from their
+            # source rather than the ports (read_references_from); None: from the ports.
+            self._reference: Any = None
             n_arm = plant.num_velocities() - 6
             self._sizes = (4 + n_arm, sum(size for _, size in self.diagnostics_layout))
             self._ports = tuple(self.DeclareVectorInputPort(name, size) for name, size in (
@@ -185,6 +188,35 @@ def _define(T):
                                    "it holds nothing")
             self._sample(context, context.get_mutable_discrete_state())
 
+        def read_references_from(self, source: Any) -> None:
+            """Evaluate ``source`` (a :class:`~aerial_drake.trajectories.base.ReferenceSource`)
+            at the context's time in place of the three reference input ports, or read the
+            ports again (``source`` None).
+
+            Only for a controller whose reference ports are fed by a
+            :class:`~aerial_drake.trajectories.generator.ReferenceGenerator` of this very
+            source, as :func:`aerial_drake.simulation.diagram.add_closed_loop` wires it: the
+            generator's output is ``source.fill`` at the context's time, so the law sees the
+            same doubles, without the generator's Python callback and three input
+            evaluations at every sample (about a tenth of the closed loop's overhead over the
+            plant, docs/performance.md). The ports stay connected for other readers. The
+            three arrays the law then receives are views of one buffer, refilled at each
+            evaluation: a controller that keeps a reference across samples copies it.
+            """
+            if source is None:
+                self._reference = None
+                return
+            if self._scalar is not float:
+                raise NotImplementedError("read_references_from: double controllers only")
+            sizes = [port.size() for port in self._ports[1:]]
+            if source.size != sum(sizes):
+                raise ValueError(f"read_references_from: the source's packed reference has "
+                                 f"{source.size} entries; the controller's reference ports "
+                                 f"take {sizes} ({sum(sizes)}): a source for another task")
+            buffer = np.zeros(source.size)
+            com, task = buffer[:sizes[0]], buffer[sizes[0]:sizes[0] + sizes[1]]
+            self._reference = (source.fill, buffer, com, task, buffer[sizes[0] + sizes[1]:])
+
         def get_state_input_port(self):
             return self._ports[0]
 
@@ -196,8 +228,13 @@ def _define(T):
 
         def _inputs(self, context: Context_[T]
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-            """The state and the three references at ``context``."""
+            """The state and the three references at ``context`` (the references from their
+            source, :meth:`read_references_from`, or from the ports)."""
             state, com, task, heading = self._ports
+            if self._reference is not None:
+                fill, buffer, com_value, task_value, heading_value = self._reference
+                fill(context.get_time(), buffer)  # the generator's output, to the bit
+                return state.Eval(context), com_value, task_value, heading_value
             return (state.Eval(context), com.Eval(context), task.Eval(context),
                     heading.Eval(context))
 

@@ -35,12 +35,11 @@ from pydrake.systems.framework import Diagram, DiagramBuilder, InputPort, Output
 from pydrake.systems.primitives import (
     AffineSystem,
     Demultiplexer,
-    LogVectorOutput,
     MatrixGain,
     Saturation,
-    VectorLogSink,
 )
 
+from aerial_drake.control.base import ControllerBase
 from aerial_drake.control.controller import DecoupledController
 from aerial_drake.control.interface import check_controller_ports
 from aerial_drake.control.limits import command_limits
@@ -60,6 +59,7 @@ from aerial_drake.simulation.disturbances import (
     bound_end_effector_windows,
     resolve_random_disturbances,
 )
+from aerial_drake.simulation.loggers import PortLog, log_ports
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
 from aerial_drake.simulation.sensing import add_state_sensor
 from aerial_drake.simulation.wind import add_wind
@@ -278,6 +278,11 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
     for port in ("com_reference", "task_reference", "heading_reference"):
         builder.Connect(reference.GetOutputPort(port), controller.GetInputPort(port))
         outputs[port] = reference.GetOutputPort(port)
+    if isinstance(controller, ControllerBase):
+        # Its ports are the generator's, which outputs source.fill at the context's time: the
+        # controller evaluates the source itself at each sample, the same doubles without a
+        # Python callback and three port evaluations per sample (docs/performance.md).
+        controller.read_references_from(source)
 
     state_out = plant.get_state_output_port()
     model_state = state_out
@@ -370,12 +375,13 @@ LOGGED_PORTS = ("plant_state", "command", "applied_command", "diagnostics", "rot
 
 def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = None,
                      controller_factory: ControllerFactory | None = None,
-                     ) -> tuple[DiagramBuilder, ClosedLoop, dict[str, VectorLogSink]]:
+                     ) -> tuple[DiagramBuilder, ClosedLoop, dict[str, PortLog]]:
     """Add the closed loop's systems (:func:`add_closed_loop`, not nested in a Diagram of
     their own), the scenario's disturbance sources and loggers to ``builder``.
 
     Returns the builder (not yet built, so callers can add a visualiser), the closed loop
-    (``diagram`` None; its ports by name) and the loggers by port name.
+    (``diagram`` None; its ports by name) and each logged port's log by port name (a
+    :class:`~aerial_drake.simulation.loggers.PortLog`: ``FindLog(context)`` as a logger's).
     """
     builder = builder or DiagramBuilder()
     scenario = resolve_random_disturbances(scenario)
@@ -390,10 +396,7 @@ def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = Non
             wrench = add_wind(builder, scenario.wind, scenario.duration, sim.plant,
                               sim.base_body, wrench)
         builder.Connect(wrench, loop.input_port(port))
-    loggers = {}
-    for port in LOGGED_PORTS:
-        if loop.has_output_port(port):
-            logger = LogVectorOutput(loop.output_port(port), builder, scenario.log_period)
-            logger.set_name(f"log_{port}")
-            loggers[port] = logger
+    # One logger for all (simulation.loggers: one publish event per sample, not one per port).
+    loggers = log_ports(builder, {port: loop.output_port(port) for port in LOGGED_PORTS
+                                  if loop.has_output_port(port)}, scenario.log_period)
     return builder, loop, loggers

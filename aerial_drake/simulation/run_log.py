@@ -10,13 +10,13 @@ import json
 
 import numpy as np
 from pydrake.systems.framework import Context
-from pydrake.systems.primitives import VectorLogSink
 
 from aerial_drake.control.law import AssumptionViolation, diagnostics_layout
 from aerial_drake.control.wrench_observer import observer_layouts
 from aerial_drake.simulation.diagram import ClosedLoop, input_limits
 from aerial_drake.simulation.failure_cause import arm_stretch, classify_failure, singular_stop
 from aerial_drake.simulation.joint_limits import ArmLimits, limit_metrics
+from aerial_drake.simulation.loggers import PortLog
 from aerial_drake.simulation.metrics import (
     compute_metrics,
     disturbance_response,
@@ -50,7 +50,7 @@ def controller_diagnostics_layout(controller, width: int, n: int) -> Layout:
     return tuple((f"d{i}", 1) for i in range(width))
 
 
-def collect_log(scenario: Scenario, loop: ClosedLoop, loggers: dict[str, VectorLogSink],
+def collect_log(scenario: Scenario, loop: ClosedLoop, loggers: dict[str, PortLog],
                 context: Context) -> tuple[dict[str, np.ndarray], dict[str, Layout]]:
     """The loggers' samples as ``{"t": times, port: (samples, size)}``, cut to a common
     length, with the references at the sample times (what the reference ports gave there),

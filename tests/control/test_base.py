@@ -167,3 +167,68 @@ def test_bad_layouts_and_entries_are_refused(model):
     assert nothing.diagnostics_layout == () and nothing.get_diagnostics_output_port().size() == 0
     with pytest.raises(NotImplementedError, match="Nothing must implement calc_command"):
         nothing.evaluate(x, np.zeros(15), np.zeros(27), np.zeros(9))
+
+
+class Recorder(ControllerBase):
+    """Zeros, recording the references each sample was given (copies)."""
+
+    def __init__(self, model, period):
+        super().__init__(model.plant, model.task, period=period)
+        self._n = model.n
+        self.seen = []
+
+    def calc_command(self, t, x, com, task, heading):
+        self.seen.append((t, np.concatenate([com, task, heading])))
+        return np.zeros(4 + self._n)
+
+
+def _references_seen(model, source, read_from_source):
+    """The references a sampled controller fed by a ReferenceGenerator of ``source`` sees
+    over a few samples, read from its ports or (``read_from_source``) from the source."""
+    from aerial_drake.trajectories.generator import ReferenceGenerator
+
+    builder = DiagramBuilder()
+    dut = builder.AddSystem(Recorder(model, PERIOD))
+    reference = builder.AddSystem(ReferenceGenerator(source))
+    for port in ("com_reference", "task_reference", "heading_reference"):
+        builder.Connect(reference.GetOutputPort(port), dut.GetInputPort(port))
+    x = np.zeros(model.plant.num_multibody_states())
+    x[0] = 1.0
+    state = builder.AddSystem(ConstantVectorSource(x))
+    builder.Connect(state.get_output_port(), dut.get_state_input_port())
+    if read_from_source:
+        dut.read_references_from(source)
+    simulator = Simulator(builder.Build())
+    simulator.AdvanceTo(7.5 * PERIOD)
+    return dut.seen
+
+
+def test_references_read_from_their_source_equal_the_ports_to_the_bit(model):
+    from aerial_drake.trajectories.kinds import reference_of
+    from aerial_drake.trajectories.params import TrajectoryParams
+
+    source = reference_of(TrajectoryParams(), model.task_joint_nominal())
+    by_ports = _references_seen(model, source, False)
+    by_source = _references_seen(model, source, True)
+    assert len(by_ports) == len(by_source) == 8  # t = 0, ..., 7 PERIOD
+    for (t1, r1), (t2, r2) in zip(by_ports, by_source):
+        assert t1 == t2
+        np.testing.assert_array_equal(r1, r2)
+    # The references move (so the comparison holds them at each sample, not a constant).
+    assert not np.array_equal(by_source[1][1], by_source[-1][1])
+
+
+def test_read_references_from_refuses_a_source_of_another_size_and_none_restores(model):
+    from aerial_drake.trajectories.kinds import reference_of
+    from aerial_drake.trajectories.params import TrajectoryParams
+
+    dut = Recorder(model, PERIOD)
+    source = reference_of(TrajectoryParams(), model.task_joint_nominal())
+    source.size += 1  # as a source for a task of another shape
+    with pytest.raises(ValueError, match=r"read_references_from: .* reference ports take"):
+        dut.read_references_from(source)
+    source.size -= 1
+    dut.read_references_from(source)
+    assert dut._reference is not None
+    dut.read_references_from(None)
+    assert dut._reference is None
