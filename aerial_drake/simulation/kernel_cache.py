@@ -1,0 +1,284 @@
+"""numba's cache of the kernels a run calls: whether it is warm, compiling it one process of
+the machine at a time (here, in a child process, or in the background), and the reference
+implementations for a run that must not wait for it.
+
+The first use after installing compiles the control law, its tracking errors and the paper
+reference (about 35 s of one core on this project's 2-core machine, up to a minute loaded;
+docs/performance.md, "Cold start"). numba writes each kernel's cache as a data file and an
+index, each to a temporary name then renamed (``numba.core.caching``), so a compile stopped
+at any point (Ctrl-C, a kill) leaves a cache numba can use: complete entries load, a missing
+one compiles again; :func:`kernels_cache_is_cold` reads it the same way.
+
+Who waits for the compile:
+
+- ``aerial-drake run SCENARIO`` does not: it starts :func:`start_background_compile` and runs
+  at once on the reference implementations (:func:`reference_implementations`: the law and
+  the tracking errors in numpy and Drake, the paper reference interpreted), which agree with
+  the compiled law to round-off, not to the bit; its output and ``metrics.json``
+  (``control_law``) say so. Later runs load the compiled kernels.
+- ``aerial-drake run paper``, ``compare`` and the study workers do: their results must be
+  those of every later run, to the bit. They wait for a compile under way (a line every few
+  seconds), else compile themselves.
+
+One compile at a time per cache and user: :func:`compile_lock` (an ``flock`` on a file in the
+temporary directory, released by the system when its holder exits however it exits).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import fcntl
+import hashlib
+import os
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+from typing import Callable, Iterator, TextIO
+
+from aerial_drake.control.compiled.law import (
+    LAW_KERNELS,
+    compile_law,
+    is_cached,
+    law_cache_is_cold,
+    use_reference_law,
+)
+from aerial_drake.trajectories.paper import (
+    REFERENCE_KERNELS,
+    compile_reference,
+    use_interpreted_reference,
+)
+
+#: Why a run on a cold cache runs the reference implementations (metrics.json's
+#: ``control_law`` says "reference" and this).
+COLD_REASON = "numba's cache is cold (first run after installing): compiling in the background"
+
+
+def compile_kernels() -> None:
+    """Compile, or load from numba's cache, every numba kernel a run calls from Python: the
+    control law and the reference's. From their argument types alone, so before any model
+    is built; the command line calls this on the first run after installing and then
+    restarts itself (``aerial_drake.cli.restart``)."""
+    compile_law()
+    compile_reference()
+
+
+def kernels_cache_is_cold() -> bool:
+    """Whether any kernel :func:`compile_kernels` compiles would compile rather than load
+    (:func:`aerial_drake.control.compiled.is_cached`)."""
+    return law_cache_is_cold() or not all(is_cached(kernel, signature)
+                                          for kernel, signature in REFERENCE_KERNELS)
+
+
+def _cache_tag() -> str:
+    """A short name of where numba caches the law (next to the installed package, or under
+    ``NUMBA_CACHE_DIR``): one lock per cache, so that compiles of different installs or
+    cache folders never wait for each other."""
+    try:
+        # numba's internals (untyped): guarded by the except below.
+        where = str(LAW_KERNELS[0][0]._cache._cache_path)  # type: ignore[attr-defined]
+    except AttributeError:
+        where = str(Path(__file__).resolve().parents[1])
+    return hashlib.sha1(where.encode()).hexdigest()[:10]
+
+
+def lock_path() -> Path:
+    """The lock file for compiling the kernels into this process's cache (one per user and
+    cache, in the temporary directory)."""
+    return Path(tempfile.gettempdir()) / f"aerial_drake_kernels_{os.getuid()}_{_cache_tag()}.lock"
+
+
+def log_path() -> Path:
+    """Where the background compile writes what it did (one per user and cache, appended)."""
+    return Path(tempfile.gettempdir()) / f"aerial_drake_compile_{os.getuid()}_{_cache_tag()}.log"
+
+
+def _holder(lock) -> str:
+    """The process id the lock's holder wrote into the lock file ("" if none)."""
+    lock.seek(0)
+    return lock.read().strip()
+
+
+@contextlib.contextmanager
+def compile_lock(wait: bool = True, stream: TextIO | None = None) -> Iterator[bool]:
+    """Hold the machine's compile lock; yields whether it is held (False only with ``wait``
+    false and another process holding it). While waiting, a line on ``stream`` every few
+    seconds (:class:`Ticker`) names the holder."""
+    with open(lock_path(), "a+") as lock:
+        try:
+            fcntl.flock(lock.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            if not wait:
+                yield False
+                return
+            pid = _holder(lock)
+            with Ticker(stream, f"aerial_drake: waiting for the numba compile under way "
+                                f"(process {pid or '?'}; log {log_path()})"):
+                fcntl.flock(lock.fileno(), fcntl.LOCK_EX)
+        try:
+            lock.seek(0)
+            lock.truncate()
+            lock.write(str(os.getpid()))
+            lock.flush()
+            yield True
+        finally:
+            fcntl.flock(lock.fileno(), fcntl.LOCK_UN)
+
+
+def compile_is_under_way() -> bool:
+    """Whether another process holds the compile lock now (a probe: takes and drops it)."""
+    with open(lock_path(), "a+") as lock:
+        try:
+            fcntl.flock(lock.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return True
+        fcntl.flock(lock.fileno(), fcntl.LOCK_UN)
+        return False
+
+
+class Ticker:
+    """A context manager that says ``label`` with the seconds elapsed on ``stream`` (None:
+    nothing) every ``every`` s from a thread while the block runs (numba's compile and a
+    lock's wait leave the thread its turns): on a terminal one line rewritten, else one line
+    per report. Says how long it took at the end."""
+
+    def __init__(self, stream: TextIO | None, label: str, every: float = 5.0) -> None:
+        self.stream, self.label = stream, label
+        tty = stream is not None and getattr(stream, "isatty", lambda: False)()
+        self.every = 1.0 if tty else every
+        self._start_of_line = "\r" if tty else ""
+        self._end_of_line = "" if tty else "\n"
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self.start = 0.0
+
+    def _say(self, text: str) -> None:
+        if self.stream is not None:
+            self.stream.write(f"{self._start_of_line}{self.label} ... {text}"
+                              f"{self._end_of_line}")
+            self.stream.flush()
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.every):
+            self._say(f"{time.perf_counter() - self.start:.0f} s")
+
+    def __enter__(self) -> Ticker:
+        self.start = time.perf_counter()
+        self._say("")
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._stop.set()
+        self._thread.join()
+        took = time.perf_counter() - self.start
+        self._say(f"{'done' if exc[0] is None else 'stopped'} ({took:.0f} s)")
+        if self._end_of_line == "" and self.stream is not None:
+            self.stream.write("\n")
+
+
+def _python_for_this_package(statement: str) -> list[str]:
+    """A command running ``statement`` with this very package first on the path (not one a
+    working directory's source tree would shadow: the same installed files, so the same
+    cache)."""
+    root = str(Path(__file__).resolve().parents[2])
+    return [sys.executable, "-c", f"import sys; sys.path.insert(0, {root!r}); {statement}"]
+
+
+#: The background compiles this process started (kept so that Python does not warn about a
+#: child still running when the object is collected; nobody waits for them).
+_STARTED: list[subprocess.Popen] = []
+
+
+def start_background_compile() -> int | None:
+    """Start :func:`background_main` in a process of its own, detached from this one and
+    from the terminal (its own session: a Ctrl-C in the terminal does not stop it, and it
+    outlives this process; it ends when the cache is written, in well under a minute or two),
+    at a lower priority; its output is appended to :func:`log_path`. Returns its process id,
+    or None where a compile is already under way."""
+    if compile_is_under_way():
+        return None
+    with open(log_path(), "ab") as log:
+        child = subprocess.Popen(
+            _python_for_this_package("from aerial_drake.simulation.kernel_cache import "
+                                     "background_main; background_main()"),
+            stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
+            start_new_session=True, close_fds=True)
+    _STARTED.append(child)
+    return child.pid
+
+
+def background_main() -> None:
+    """The background compile (:func:`start_background_compile`): under the lock (after
+    any compile under way), if the cache is still cold."""
+    with contextlib.suppress(OSError):
+        os.nice(10)  # the run that started it goes first
+    stamp = time.strftime("%Y-%m-%d %H:%M:%S")
+    with compile_lock():
+        if not kernels_cache_is_cold():
+            print(f"{stamp} process {os.getpid()}: the cache is warm already", flush=True)
+            return
+        print(f"{stamp} process {os.getpid()}: compiling the kernels", flush=True)
+        start = time.perf_counter()
+        compile_kernels()
+        print(f"process {os.getpid()}: done in {time.perf_counter() - start:.1f} s; cache "
+              f"{'still cold' if kernels_cache_is_cold() else 'warm'}", flush=True)
+
+
+def compile_in_child(stream: TextIO | None = None) -> None:
+    """Compile the kernels in a child process and wait for it (a line every few seconds on
+    ``stream``), so that this process, which then loads them, does not keep the compile's
+    memory (about 200 MB, docs/performance.md, "Memory"): for long-lived processes (study
+    workers). Falls back to compiling here if the child fails."""
+    with Ticker(stream, "aerial_drake: compiling the numba kernels (first use on this "
+                        "machine; cached afterwards)"):
+        done = subprocess.run(_python_for_this_package(
+            "from aerial_drake.simulation.kernel_cache import compile_kernels; "
+            "compile_kernels()"), stdin=subprocess.DEVNULL, capture_output=True)
+    if done.returncode != 0 or kernels_cache_is_cold():
+        compile_kernels()
+
+
+@contextlib.contextmanager
+def reference_implementations(reason: str) -> Iterator[None]:
+    """In the block, this process builds runs on the reference implementations: controllers
+    and tracking errors (:func:`aerial_drake.control.compiled.use_reference_law`) and the
+    paper reference (interpreted, :func:`aerial_drake.trajectories.paper.
+    use_interpreted_reference`); nothing compiles. Restored after it."""
+    use_reference_law(reason)
+    use_interpreted_reference(True)
+    try:
+        yield
+    finally:
+        use_reference_law(None)
+        use_interpreted_reference(False)
+
+
+def warm_or_started(stream: TextIO | None) -> tuple[bool, Callable[[], None]]:
+    """For a run that need not wait (module docstring): ``(True, nothing)`` when the cache is
+    warm; else start the background compile (or find one under way), say so on ``stream``,
+    and return ``(False, note)``, ``note()`` saying at the end of the run whether the compile
+    has finished."""
+    if not kernels_cache_is_cold():
+        return True, lambda: None
+    pid = start_background_compile()
+    who = f"process {pid}" if pid is not None else "a compile already under way"
+    if stream is not None:
+        stream.write("aerial_drake: numba's cache is cold (first run after installing): the "
+                     f"compiled kernels are being built in the background ({who}; log "
+                     f"{log_path()}); this run uses the reference implementation of the "
+                     "law (numpy; the same results to round-off, not to the bit)\n")
+        stream.flush()
+
+    def note() -> None:
+        if stream is None:
+            return
+        state = ("still compiling: runs started before it ends use the reference "
+                 "implementation too" if kernels_cache_is_cold() or compile_is_under_way()
+                 else "done: later runs use the compiled law")
+        stream.write(f"aerial_drake: the background compile is {state}\n")
+        stream.flush()
+
+    return False, note
