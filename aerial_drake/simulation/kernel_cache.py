@@ -30,6 +30,7 @@ import contextlib
 import fcntl
 import hashlib
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -194,18 +195,25 @@ _STARTED: list[subprocess.Popen] = []
 
 def start_background_compile() -> int | None:
     """Start :func:`background_main` in a process of its own, detached from this one and
-    from the terminal (its own session: a Ctrl-C in the terminal does not stop it, and it
-    outlives this process; it ends when the cache is written, in well under a minute or two),
-    at a lower priority; its output is appended to :func:`log_path`. Returns its process id,
-    or None where a compile is already under way."""
+    from the terminal's signals (its own process group: a Ctrl-C in the terminal does not
+    stop it; it ignores SIGHUP; it outlives this process and ends when the cache is written,
+    in a minute or so), at the lowest priority; its output is appended to :func:`log_path`.
+    Returns its process id, or None where a compile is already under way.
+
+    Not a session of its own: Linux's scheduler gives each session (autogroup) an equal
+    share of the CPU whatever its processes' nice values, so a compile in its own session
+    took half a core from the run it was started by (measured: cold/warm 3.4 -> see
+    docs/performance.md, "Cold start"); in the run's session its nice value holds."""
     if compile_is_under_way():
         return None
+    group = ({"process_group": 0} if sys.version_info >= (3, 11)
+             else {"preexec_fn": os.setpgrp})
     with open(log_path(), "ab") as log:
         child = subprocess.Popen(
             _python_for_this_package("from aerial_drake.simulation.kernel_cache import "
                                      "background_main; background_main()"),
-            stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
-            start_new_session=True, close_fds=True)
+            stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, close_fds=True,
+            **group)  # type: ignore[call-overload]
     _STARTED.append(child)
     return child.pid
 
@@ -214,7 +222,8 @@ def background_main() -> None:
     """The background compile (:func:`start_background_compile`): under the lock (after
     any compile under way), if the cache is still cold."""
     with contextlib.suppress(OSError):
-        os.nice(10)  # the run that started it goes first
+        os.nice(19)  # the run that started it, and every other, goes first
+    signal.signal(signal.SIGHUP, signal.SIG_IGN)  # the terminal closing: go on
     stamp = time.strftime("%Y-%m-%d %H:%M:%S")
     with compile_lock():
         if not kernels_cache_is_cold():
