@@ -30,7 +30,6 @@ import contextlib
 import fcntl
 import hashlib
 import os
-import signal
 import subprocess
 import sys
 import tempfile
@@ -188,52 +187,68 @@ def _python_for_this_package(statement: str) -> list[str]:
     return [sys.executable, "-c", f"import sys; sys.path.insert(0, {root!r}); {statement}"]
 
 
+#: The background compile's program (:func:`start_background_compile`), standard library
+#: only until it compiles: it takes the cache's lock at once (so that a second cold run
+#: starts none), drops to the lowest priority, waits for the run that started it to end (so
+#: that the two never compete for the CPU), then imports this package and compiles.
+_BACKGROUND = """
+import fcntl, os, signal, sys, time
+signal.signal(signal.SIGHUP, signal.SIG_IGN)
+os.nice(19)
+lock = open({lock!r}, "a+")
+fcntl.flock(lock.fileno(), fcntl.LOCK_EX)
+lock.seek(0); lock.truncate(); lock.write(str(os.getpid())); lock.flush()
+print(time.strftime("%Y-%m-%d %H:%M:%S"), "process", os.getpid(), "waits for", {parent},
+      "to end", flush=True)
+while os.getppid() == {parent}:
+    time.sleep(0.2)
+sys.path.insert(0, {root!r})
+from aerial_drake.simulation.kernel_cache import background_compile
+background_compile()
+"""
+
 #: The background compiles this process started (kept so that Python does not warn about a
 #: child still running when the object is collected; nobody waits for them).
 _STARTED: list[subprocess.Popen] = []
 
 
 def start_background_compile() -> int | None:
-    """Start :func:`background_main` in a process of its own, detached from this one and
-    from the terminal's signals (its own process group: a Ctrl-C in the terminal does not
-    stop it; it ignores SIGHUP; it outlives this process and ends when the cache is written,
-    in a minute or so), at the lowest priority; its output is appended to :func:`log_path`.
-    Returns its process id, or None where a compile is already under way.
+    """Start the compile in a process of its own (:data:`_BACKGROUND`), detached from the
+    terminal's signals (its own process group: a Ctrl-C in the terminal does not stop it;
+    it ignores SIGHUP): it compiles once this process has ended, at the lowest priority, and
+    then exits (30 s to a minute); its output is appended to :func:`log_path`. Returns its
+    process id, or None where a compile is already under way.
 
     Not a session of its own: Linux's scheduler gives each session (autogroup) an equal
-    share of the CPU whatever its processes' nice values, so a compile in its own session
-    took half a core from the run it was started by (measured: cold/warm 3.4 -> see
-    docs/performance.md, "Cold start"); in the run's session its nice value holds."""
+    share of the CPU whatever its processes' nice values, so a compile in a session of its
+    own would take as much of a busy machine as the runs after it; in the run's session its
+    nice value holds (docs/performance.md, "Cold start")."""
     if compile_is_under_way():
         return None
+    program = _BACKGROUND.format(lock=str(lock_path()), parent=os.getpid(),
+                                 root=str(Path(__file__).resolve().parents[2]))
     group = ({"process_group": 0} if sys.version_info >= (3, 11)
              else {"preexec_fn": os.setpgrp})
     with open(log_path(), "ab") as log:
         child = subprocess.Popen(
-            _python_for_this_package("from aerial_drake.simulation.kernel_cache import "
-                                     "background_main; background_main()"),
-            stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT, close_fds=True,
-            **group)  # type: ignore[call-overload]
+            [sys.executable, "-c", program], stdin=subprocess.DEVNULL, stdout=log,
+            stderr=subprocess.STDOUT, close_fds=True, **group)  # type: ignore[call-overload]
     _STARTED.append(child)
     return child.pid
 
 
-def background_main() -> None:
-    """The background compile (:func:`start_background_compile`): under the lock (after
-    any compile under way), if the cache is still cold."""
-    with contextlib.suppress(OSError):
-        os.nice(19)  # the run that started it, and every other, goes first
-    signal.signal(signal.SIGHUP, signal.SIG_IGN)  # the terminal closing: go on
-    stamp = time.strftime("%Y-%m-%d %H:%M:%S")
-    with compile_lock():
-        if not kernels_cache_is_cold():
-            print(f"{stamp} process {os.getpid()}: the cache is warm already", flush=True)
-            return
-        print(f"{stamp} process {os.getpid()}: compiling the kernels", flush=True)
-        start = time.perf_counter()
-        compile_kernels()
-        print(f"process {os.getpid()}: done in {time.perf_counter() - start:.1f} s; cache "
-              f"{'still cold' if kernels_cache_is_cold() else 'warm'}", flush=True)
+def background_compile() -> None:
+    """The background compile's work, its lock held (:data:`_BACKGROUND`): compile if the
+    cache is still cold (another process may have compiled it meanwhile)."""
+    if not kernels_cache_is_cold():
+        print(f"process {os.getpid()}: the cache is warm already", flush=True)
+        return
+    print(f"{time.strftime('%Y-%m-%d %H:%M:%S')} process {os.getpid()}: compiling the "
+          "kernels", flush=True)
+    start = time.perf_counter()
+    compile_kernels()
+    print(f"process {os.getpid()}: done in {time.perf_counter() - start:.1f} s; cache "
+          f"{'still cold' if kernels_cache_is_cold() else 'warm'}", flush=True)
 
 
 def compile_in_child(stream: TextIO | None = None) -> None:
@@ -273,21 +288,26 @@ def warm_or_started(stream: TextIO | None) -> tuple[bool, Callable[[], None]]:
     if not kernels_cache_is_cold():
         return True, lambda: None
     pid = start_background_compile()
-    who = f"process {pid}" if pid is not None else "a compile already under way"
     if stream is not None:
-        stream.write("aerial_drake: numba's cache is cold (first run after installing): the "
-                     f"compiled kernels are being built in the background ({who}; log "
-                     f"{log_path()}); this run uses the reference implementation of the "
-                     "law (numpy; the same results to round-off, not to the bit)\n")
+        when = (f"when this run ends (process {pid})" if pid is not None
+                else "by a compile already under way")
+        stream.write("aerial_drake: numba's cache is cold (first run after installing): this "
+                     "run uses the reference implementation of the law (numpy; the compiled "
+                     "law's results to round-off, not to the bit); the compiled law is built "
+                     f"in the background {when}; log {log_path()}\n")
         stream.flush()
 
     def note() -> None:
         if stream is None:
             return
-        state = ("still compiling: runs started before it ends use the reference "
-                 "implementation too" if kernels_cache_is_cold() or compile_is_under_way()
-                 else "done: later runs use the compiled law")
-        stream.write(f"aerial_drake: the background compile is {state}\n")
+        if pid is not None:
+            state = ("starts now (30 s to a minute, at the lowest priority); runs started "
+                     "before it has finished use the reference implementation too")
+        elif kernels_cache_is_cold() or compile_is_under_way():
+            state = "still under way"
+        else:
+            state = "done: later runs use the compiled law"
+        stream.write(f"aerial_drake: the background compile {state}\n")
         stream.flush()
 
     return False, note
