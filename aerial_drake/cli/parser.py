@@ -80,7 +80,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help="on the first run after installing (numba's cache cold), compile "
                           "the control law first (about a minute) instead of running at once "
                           "on its reference implementation (equal to round-off, not to the "
-                          "bit) while it compiles in the background; 'run paper' always does")
+                          "bit) and compiling in the background after it; 'run paper' and "
+                          "runs longer than 30 s always do")
     run.add_argument("--no-wait", action="store_true",
                      help="with --meshcat: start the simulation at once, without waiting for a "
                           "browser to open the page")

@@ -39,8 +39,8 @@ def compile_first(restartable: bool) -> None:
     with kernel_cache.compile_lock(stream=sys.stderr):  # waits for a compile under way
         if not kernel_cache.kernels_cache_is_cold():
             return
-        with kernel_cache.Ticker(sys.stderr, "aerial_drake: compiling the control law with "
-                                 "numba (first use after installing; cached afterwards)"):
+        # (compile_law's own note says what and why, once)
+        with kernel_cache.Ticker(sys.stderr, "aerial_drake: compiling"):
             kernel_cache.compile_kernels()
     if kernel_cache.kernels_cache_is_cold():
         return

@@ -18,6 +18,12 @@ from aerial_drake.cli.restart import cold_start, compile_first
 # (The standard library only: importing it starts and compiles nothing.)
 from aerial_drake.viz.live import WAIT_TIMEOUT_S
 
+#: The longest simulated time (s) a first run on a cold numba cache runs on the reference law
+#: while the law compiles in the background: the reference law costs about 1 s more per
+#: simulated second (its evaluations and the tracking errors'), the compile 30 s to a minute
+#: once (docs/performance.md, "Cold start"); a longer run compiles first.
+COLD_REFERENCE_MAX_S = 30.0
+
 
 def _say(args: argparse.Namespace) -> TextIO:
     """Where the human-readable lines go: stdout, or stderr with --json (stdout then holds the
@@ -105,9 +111,12 @@ def cmd_run(args: argparse.Namespace) -> int:
     except ScenarioError as err:
         return report_error(args, 2, ScenarioError(f"{err}{option_note(err, overrides, args)}",
                                                    err.field))
-    if args.wait_compile:  # else a cold cache's run goes on at once (cold_start, below)
+    # A cold cache's run goes on at once on the reference law (cold_start, below), unless asked
+    # to wait or long enough for the compile to cost less than the reference law would.
+    wait = args.wait_compile or scenario.duration > COLD_REFERENCE_MAX_S
+    if wait:
         compile_first(args.restartable)  # after the scenario's checks, before Meshcat starts
-    with cold_start(args.wait_compile, sys.stderr) as compile_note:
+    with cold_start(wait, sys.stderr) as compile_note:
         status = _run_one(args, scenario)
     compile_note()
     return status

@@ -11,8 +11,9 @@ one compiles again; :func:`kernels_cache_is_cold` reads it the same way.
 
 Who waits for the compile:
 
-- ``aerial-drake run SCENARIO`` does not: it starts :func:`start_background_compile` and runs
-  at once on the reference implementations (:func:`reference_implementations`: the law and
+- ``aerial-drake run SCENARIO`` does not (unless ``--wait-compile``): it starts
+  :func:`start_background_compile`, which compiles once the run has ended, and runs at once
+  on the reference implementations (:func:`reference_implementations`: the law and
   the tracking errors in numpy and Drake, the paper reference interpreted), which agree with
   the compiled law to round-off, not to the bit; its output and ``metrics.json``
   (``control_law``) say so. Later runs load the compiled kernels.
