@@ -67,5 +67,8 @@ def cold_start(wait: bool, stream) -> Iterator[Callable[[], None]]:
     if warm:
         yield note
         return
-    with kernel_cache.reference_implementations(kernel_cache.COLD_REASON):
-        yield note
+    try:
+        with kernel_cache.reference_implementations(kernel_cache.COLD_REASON):
+            yield note
+    finally:  # the run is over (however it ended): the compile may use the CPU now
+        kernel_cache.release_background_compile()

@@ -190,8 +190,10 @@ def _python_for_this_package(statement: str) -> list[str]:
 
 #: The background compile's program (:func:`start_background_compile`), standard library
 #: only until it compiles: it takes the cache's lock at once (so that a second cold run
-#: starts none), drops to the lowest priority, waits for the run that started it to end (so
-#: that the two never compete for the CPU), then imports this package and compiles.
+#: starts none), drops to the lowest priority, waits for the end of its standard input,
+#: which comes when the run that started it ends (:func:`release_background_compile`) or
+#: its process exits however it exits (so that the two never compete for the CPU), then
+#: imports this package and compiles.
 _BACKGROUND = """
 import fcntl, os, signal, sys, time
 signal.signal(signal.SIGHUP, signal.SIG_IGN)
@@ -199,10 +201,9 @@ os.nice(19)
 lock = open({lock!r}, "a+")
 fcntl.flock(lock.fileno(), fcntl.LOCK_EX)
 lock.seek(0); lock.truncate(); lock.write(str(os.getpid())); lock.flush()
-print(time.strftime("%Y-%m-%d %H:%M:%S"), "process", os.getpid(), "waits for", {parent},
-      "to end", flush=True)
-while os.getppid() == {parent}:
-    time.sleep(0.2)
+print(time.strftime("%Y-%m-%d %H:%M:%S"), "process", os.getpid(), "waits for the run of",
+      {parent}, "to end", flush=True)
+sys.stdin.read()
 sys.path.insert(0, {root!r})
 from aerial_drake.simulation.kernel_cache import background_compile
 background_compile()
@@ -216,8 +217,9 @@ _STARTED: list[subprocess.Popen] = []
 def start_background_compile() -> int | None:
     """Start the compile in a process of its own (:data:`_BACKGROUND`), detached from the
     terminal's signals (its own process group: a Ctrl-C in the terminal does not stop it;
-    it ignores SIGHUP): it compiles once this process has ended, at the lowest priority, and
-    then exits (30 s to a minute); its output is appended to :func:`log_path`. Returns its
+    it ignores SIGHUP): it compiles once this process calls
+    :func:`release_background_compile` or ends, at the lowest priority, and then exits (30 s
+    to a minute); its output is appended to :func:`log_path`. Returns its
     process id, or None where a compile is already under way.
 
     Not a session of its own: Linux's scheduler gives each session (autogroup) an equal
@@ -232,10 +234,18 @@ def start_background_compile() -> int | None:
              else {"preexec_fn": os.setpgrp})
     with open(log_path(), "ab") as log:
         child = subprocess.Popen(
-            [sys.executable, "-c", program], stdin=subprocess.DEVNULL, stdout=log,
+            [sys.executable, "-c", program], stdin=subprocess.PIPE, stdout=log,
             stderr=subprocess.STDOUT, close_fds=True, **group)  # type: ignore[call-overload]
     _STARTED.append(child)
     return child.pid
+
+
+def release_background_compile() -> None:
+    """Let the background compiles this process started begin (the run is over): close
+    their standard input. (The system closes it too when this process exits.)"""
+    for child in _STARTED:
+        if child.stdin is not None and not child.stdin.closed:
+            child.stdin.close()
 
 
 def background_compile() -> None:

@@ -222,6 +222,24 @@ def test_the_lock_lets_one_hold_it_and_says_who(tmp_path):
     assert not kernel_cache.compile_is_under_way()
 
 
+def test_the_background_compile_is_let_go_when_the_run_ends(monkeypatch):
+    # It waits for the end of its standard input: at the end of the run (cold_start), not at
+    # the end of a Python caller's process (cli.main from a notebook) that goes on after it.
+    waiting = subprocess.Popen([sys.executable, "-c", "import sys; sys.stdin.read()"],
+                               stdin=subprocess.PIPE)
+    monkeypatch.setattr(kernel_cache, "_STARTED", [waiting])
+    monkeypatch.setattr(kernel_cache, "kernels_cache_is_cold", lambda: True)
+    monkeypatch.setattr(kernel_cache, "start_background_compile", lambda: waiting.pid)
+    from aerial_drake.cli.restart import cold_start
+    with cold_start(False, io.StringIO()) as note:
+        assert reference_law_reason() == kernel_cache.COLD_REASON
+        time.sleep(0.2)
+        assert waiting.poll() is None  # still held during the run
+    note()
+    assert waiting.wait(timeout=30) == 0
+    assert reference_law_reason() is None
+
+
 def test_the_ticker_reports_while_the_block_runs():
     stream = io.StringIO()
     with kernel_cache.Ticker(stream, "compiling", every=0.05):
