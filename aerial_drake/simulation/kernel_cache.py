@@ -54,7 +54,8 @@ from aerial_drake.trajectories.paper import (
 
 #: Why a run on a cold cache runs the reference implementations (metrics.json's
 #: ``control_law`` says "reference" and this).
-COLD_REASON = "numba's cache is cold (first run after installing): compiling in the background"
+COLD_REASON = ("numba's cache is cold (first run after installing); the compiled law is built "
+               "in the background after this run")
 
 
 def compile_kernels() -> None:
