@@ -1,8 +1,11 @@
-"""The first run after installing: the command line compiles the numba kernels before the run
-and restarts itself (aerial_drake.cli.restart.compile_first), so that compile's memory is not under
-the run. Here: runner.compile_kernels compiles every kernel a run calls from Python (nothing
-is left to compile during the run), and when the command restarts and when it does not."""
+"""The first run after installing, for the commands that wait for the compiled law (run paper,
+compare, run --wait-compile): the command line compiles the numba kernels before the run and
+restarts itself (aerial_drake.cli.restart.compile_first), so that compile's memory is not under
+the run (plain 'run SCENARIO' does not wait: tests/simulation/test_kernel_cache.py). Here:
+runner.compile_kernels compiles every kernel a run calls from Python (nothing is left to
+compile during the run), and when the command restarts and when it does not."""
 
+import contextlib
 import json
 import os
 import subprocess
@@ -12,6 +15,7 @@ import pytest
 
 from aerial_drake import cli
 from aerial_drake.cli import info, restart
+from aerial_drake.simulation import kernel_cache
 
 # In a fresh process: compile_kernels, then a short closed-loop run; print every numba
 # dispatcher of the package's kernel modules that gained a signature during the run.
@@ -53,22 +57,32 @@ class _Restart(Exception):
 
 @pytest.fixture
 def first_run(monkeypatch):
-    """compile_first with the cache reported cold, compiling and exec recorded, not done."""
-    calls = {"compiled": 0, "execv": None}
-    cold = {"before": True, "after": False}
+    """compile_first with the cache reported cold, compiling and exec recorded, not done;
+    ``cold["waited"]``: the cache another process compiled while this one waited for its lock
+    (warm after the wait)."""
+    calls = {"compiled": 0, "execv": None, "locked": 0}
+    cold = {"before": True, "after": False, "waited": False}
 
-    def law_cache_is_cold():
+    def kernels_cache_is_cold():
+        if calls["locked"] and cold["waited"]:
+            return False
         return cold["before"] if calls["compiled"] == 0 else cold["after"]
 
     def compile_kernels():
         calls["compiled"] += 1
 
+    @contextlib.contextmanager
+    def compile_lock(wait=True, stream=None):
+        calls["locked"] += 1
+        yield True
+
     def execv(path, argv):
         calls["execv"] = (path, argv)
         raise _Restart
 
-    monkeypatch.setattr("aerial_drake.control.compiled.law_cache_is_cold", law_cache_is_cold)
-    monkeypatch.setattr("aerial_drake.simulation.runner.compile_kernels", compile_kernels)
+    monkeypatch.setattr(kernel_cache, "kernels_cache_is_cold", kernels_cache_is_cold)
+    monkeypatch.setattr(kernel_cache, "compile_kernels", compile_kernels)
+    monkeypatch.setattr(kernel_cache, "compile_lock", compile_lock)
     monkeypatch.setattr(os, "execv", execv)
     monkeypatch.delenv(restart.RESTARTED, raising=False)
     return calls, cold
@@ -88,7 +102,8 @@ def test_cold_cache_compiles_then_restarts_as_it_was_started(first_run, monkeypa
     assert os.environ[restart.RESTARTED] == "1"  # the restarted process will not restart
 
 
-@pytest.mark.parametrize("case", ["warm", "called from python", "restarted", "cache not written"])
+@pytest.mark.parametrize("case", ["warm", "called from python", "restarted", "cache not written",
+                                  "compiled by another process meanwhile"])
 def test_no_restart(first_run, monkeypatch, case):
     calls, cold = first_run
     restartable = True
@@ -98,11 +113,15 @@ def test_no_restart(first_run, monkeypatch, case):
         restartable = False  # cli.main(argv): never replace the caller's process
     elif case == "restarted":
         monkeypatch.setenv(restart.RESTARTED, "1")
-    else:
+    elif case == "cache not written":
         cold["after"] = True
+    else:  # a first 'run SCENARIO''s background compile, waited for under the lock
+        cold["waited"] = True
     restart.compile_first(restartable)
     assert calls["execv"] is None
     assert calls["compiled"] == (1 if case == "cache not written" else 0)
+    assert calls["locked"] == (1 if case in ("cache not written",
+                                             "compiled by another process meanwhile") else 0)
 
 
 def test_main_from_python_does_not_restart(monkeypatch):

@@ -76,6 +76,12 @@ def build_parser() -> argparse.ArgumentParser:
                           "SEED_BOUNDS); without it runs are deterministic")
     run.add_argument("--no-plots", action="store_true",
                      help="do not draw the run's Figs. 3-6 (PNG in the run's folder)")
+    run.add_argument("--wait-compile", action="store_true",
+                     help="on the first run after installing (numba's cache cold), compile "
+                          "the control law first (about a minute) instead of running at once "
+                          "on its reference implementation (equal to round-off, not to the "
+                          "bit) and compiling in the background after it; 'run paper' and "
+                          "runs longer than 30 s always do")
     run.add_argument("--no-wait", action="store_true",
                      help="with --meshcat: start the simulation at once, without waiting for a "
                           "browser to open the page")

@@ -13,10 +13,16 @@ from typing import TextIO
 from aerial_drake.cli.errors import report_error
 from aerial_drake.cli.overrides import option_note, scenario_overrides
 from aerial_drake.cli.paper import cmd_paper
-from aerial_drake.cli.restart import compile_first
+from aerial_drake.cli.restart import cold_start, compile_first
 
 # (The standard library only: importing it starts and compiles nothing.)
 from aerial_drake.viz.live import WAIT_TIMEOUT_S
+
+#: The longest simulated time (s) a first run on a cold numba cache runs on the reference law
+#: while the law compiles in the background: the reference law costs about 1 s more per
+#: simulated second (its evaluations and the tracking errors'), the compile 30 s to a minute
+#: once (docs/performance.md, "Cold start"); a longer run compiles first.
+COLD_REFERENCE_MAX_S = 30.0
 
 
 def _say(args: argparse.Namespace) -> TextIO:
@@ -80,10 +86,6 @@ def check_options(args: argparse.Namespace) -> dict:
 def cmd_run(args: argparse.Namespace) -> int:
     """``aerial-drake run SCENARIO`` (one scenario, optionally watched in Meshcat) and
     ``aerial-drake run paper`` (:func:`aerial_drake.cli.paper.cmd_paper`)."""
-    from aerial_drake.dynamics.equilibrium import UnreachablePose
-    from aerial_drake.simulation.interrupts import Interrupted
-    from aerial_drake.simulation.outputs import OutputError, ResultsNotWritten
-    from aerial_drake.simulation.runner import SimulationFailed, SimulationInterrupted, run_scenario
     from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
 
     try:
@@ -109,7 +111,25 @@ def cmd_run(args: argparse.Namespace) -> int:
     except ScenarioError as err:
         return report_error(args, 2, ScenarioError(f"{err}{option_note(err, overrides, args)}",
                                                    err.field))
-    compile_first(args.restartable)  # after the scenario's checks, before Meshcat starts
+    # A cold cache's run goes on at once on the reference law (cold_start, below), unless asked
+    # to wait or long enough for the compile to cost less than the reference law would.
+    wait = args.wait_compile or scenario.duration > COLD_REFERENCE_MAX_S
+    if wait:
+        compile_first(args.restartable)  # after the scenario's checks, before Meshcat starts
+    with cold_start(wait, sys.stderr) as compile_note:
+        status = _run_one(args, scenario)
+    compile_note()
+    return status
+
+
+def _run_one(args: argparse.Namespace, scenario) -> int:
+    """``run SCENARIO`` once its scenario is loaded and checked (:func:`cmd_run`)."""
+    from aerial_drake.dynamics.equilibrium import UnreachablePose
+    from aerial_drake.simulation.interrupts import Interrupted
+    from aerial_drake.simulation.outputs import OutputError, ResultsNotWritten
+    from aerial_drake.simulation.runner import SimulationFailed, SimulationInterrupted, run_scenario
+    from aerial_drake.simulation.scenarios import ScenarioError
+
     out = Path(args.out) / scenario.folder_name
     view = None
     if args.meshcat or args.record:  # aerial_drake.viz.meshcat_view

@@ -23,6 +23,7 @@ from aerial_drake.control.compiled import (
     NONFINITE,
     CompiledLaw,
     pack_gains,
+    reference_law_reason,
 )
 from aerial_drake.control.law import (
     F_D_LIMIT,
@@ -106,7 +107,12 @@ class _DecoupledControllerBase:
     def _make_compiled(self, gains: Gains) -> CompiledLaw | None:
         """The compiled law (:mod:`aerial_drake.control.compiled`) on this plant, or None where its
         kernels do not handle the plant's structure (then :meth:`solve` serves, and
-        :attr:`not_compiled_reason` says why)."""
+        :attr:`not_compiled_reason` says why), or where this process runs the reference
+        implementation (:func:`aerial_drake.control.compiled.use_reference_law`)."""
+        reason = reference_law_reason()
+        if reason is not None:
+            self.not_compiled_reason = reason
+            return None
         try:
             tree = KinematicTree.from_plant(self._plant, self._dynamics.base_body)
         except UnsupportedTree as err:

@@ -161,6 +161,9 @@ def run_metrics(scenario: Scenario, loop: ClosedLoop, log: dict[str, np.ndarray]
             log["plant_state"][:, nq + sim.rotor_velocity_indices], log["rotor_drive_torque"],
             scenario.rotors.speed * np.array(sim.rotor_directions))
     metrics["failure_cause"] = failure_cause(scenario, loop, log, named, failure)
+    if getattr(loop.controller, "compiled", True) is False:  # absent: the compiled law ran
+        metrics["control_law"] = ("reference implementation (numpy): "
+                                  f"{getattr(loop.controller, 'not_compiled_reason', '')}")
     plan = getattr(loop.reference.source, "report", None)  # trajectory.com_planning's
     if plan is not None:
         metrics["com_planning"] = plan.as_dict()

@@ -16,7 +16,7 @@ from pydrake.multibody.plant import MultibodyPlant
 from pydrake.systems.analysis import ApplySimulatorConfig, Simulator
 from pydrake.systems.framework import Context
 
-from aerial_drake.control.compiled import compile_law
+from aerial_drake.control.compiled import reference_law_reason
 from aerial_drake.control.law import AssumptionViolation
 from aerial_drake.control.reference_pose import reference_configuration
 from aerial_drake.control.registry import ControllerFactory
@@ -25,6 +25,7 @@ from aerial_drake.simulation.disturbances import resolve_random_disturbances
 from aerial_drake.simulation.feasibility import check_reference, check_start_posture
 from aerial_drake.simulation.interrupts import deferred, handling, signal_name
 from aerial_drake.simulation.joint_limits import LimitMonitor
+from aerial_drake.simulation.kernel_cache import compile_kernels  # noqa: F401 (callers' name)
 from aerial_drake.simulation.nonfinite import (
     SIGNAL_MEANING,
     cut_at_divergence,
@@ -50,7 +51,6 @@ from aerial_drake.simulation.scenarios import Scenario, ScenarioError
 from aerial_drake.simulation.scenarios.checks import REALTIME, estimated_log_mb, number
 from aerial_drake.simulation.scenarios.fields import plain_values
 from aerial_drake.simulation.tracking import Layout
-from aerial_drake.trajectories.paper import compile_reference
 
 
 class SimulationFailed(RuntimeError):
@@ -206,15 +206,6 @@ def _simulate(simulator: Simulator, loop: ClosedLoop, pauses: list[float], progr
     return failure, interrupted, time.perf_counter() - start
 
 
-def compile_kernels() -> None:
-    """Compile, or load from numba's cache, every numba kernel a run calls from Python: the
-    control law and the reference's. From their argument types alone, so before any model
-    is built; the command line calls this on the first run after installing and then
-    restarts itself (``aerial_drake.cli``)."""
-    compile_law()
-    compile_reference()
-
-
 def run_scenario(scenario: Scenario, *, out_dir: str | Path | None = None,
                  progress: bool = True, stream: TextIO | None = None,
                  configure: Callable | None = None,
@@ -276,7 +267,8 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
     if lock is not None:
         _note_replaced_results(scenario, lock.folder, stream)
     check_reference(scenario, loop.controller_model, loop.reference.source)
-    if getattr(loop.controller, "compiled", True) is False:
+    if getattr(loop.controller, "compiled", True) is False and reference_law_reason() is None:
+        # (Where the process chose the reference law, its caller says so: kernel_cache.)
         # Said once: every valid description is compiled today (quaternion base, revolute
         # and weld joints); this is for a structure a later change admits.
         stream.write(f"note: the compiled control law cannot serve this robot "

@@ -37,7 +37,7 @@ from __future__ import annotations
 import numpy as np
 from pydrake.systems.framework import BasicVector, Context, LeafSystem
 
-from aerial_drake.control.compiled import CompiledTracking
+from aerial_drake.control.compiled import CompiledTracking, reference_law_reason
 from aerial_drake.control.controller import task_jacobian
 from aerial_drake.control.law import diagnostics_slices, rotation_angle, task_error
 from aerial_drake.dynamics.decoupling import DecoupledDynamics
@@ -78,7 +78,8 @@ class Tracking:
     :func:`tracking_layout` per sample (rows of ``x`` and the references), or one vector for
     1-D inputs. By the compiled kernels where they serve the model, else by the reference
     implementation (:mod:`aerial_drake.dynamics.decoupling` and Drake's kinematics), or by
-    that with ``compiled=False``."""
+    that with ``compiled=False`` or where this process runs the reference law
+    (:func:`aerial_drake.control.compiled.use_reference_law`)."""
 
     def __init__(self, model: AerialManipulator, *, compiled: bool = True):
         if model.task is None:
@@ -90,7 +91,7 @@ class Tracking:
         frame = model.end_effector_frame
         self._compiled: CompiledTracking | None = None
         try:
-            if compiled:
+            if compiled and reference_law_reason() is None:
                 tree = KinematicTree.from_plant(model.plant, model.base_body)
                 X_BE = frame.GetFixedPoseInBodyFrame()
                 ee = (tree.index_of(frame.body()), X_BE.rotation().matrix(),

@@ -74,7 +74,7 @@ def study_client(workers: int | None = None,
                                    preload=["aerial_drake.studies.worker"])
         client = Client(cluster)
     try:
-        client.run(ensure_warm)  # one worker of a machine compiles, the others then load
+        _warm_workers(client)
         info = {"scheduler": scheduler or "local",
                 "workers": len(client.scheduler_info()["workers"]),
                 "threads_per_worker": 1 if scheduler is None else None}
@@ -83,6 +83,21 @@ def study_client(workers: int | None = None,
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def _warm_workers(client: Any) -> None:
+    """Every worker warm (:func:`~aerial_drake.studies.worker.ensure_warm`): one worker of a
+    machine compiles, the others then load. On a cold cache here, a line every few seconds
+    on stderr while it compiles (about a minute; a remote worker host pays it too, once)."""
+    import sys
+
+    from aerial_drake.simulation.kernel_cache import Ticker, kernels_cache_is_cold
+    if not kernels_cache_is_cold():
+        client.run(ensure_warm)
+        return
+    with Ticker(sys.stderr, "aerial_drake: the workers compile the numba kernels (first use "
+                            "on this machine; cached afterwards)"):
+        client.run(ensure_warm)
 
 
 def _failed_row(kind: str, message: str) -> dict[str, Any]:

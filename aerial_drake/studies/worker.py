@@ -5,7 +5,10 @@ Drake diagram does not pickle, so each worker builds its own from the text.
 Workers start warm: :func:`ensure_warm` compiles the numba kernels (or loads them from numba's
 on-disk cache) once per process, under a lock file shared by every worker of a machine, so
 that the first compiles and writes the cache while the others wait, then load it (a cold
-cache compiled by every worker at once costs that many times the memory, and the time).
+cache compiled by every worker at once costs that many times the memory, and the time). The
+compile runs in a child process of the first worker, whose memory goes with it. A study's
+results come from the compiled law always (never the reference implementation a cold
+``aerial-drake run`` uses: docs/performance.md, "Cold start").
 
 The local cluster's workers preload this module (:func:`dask_setup`): they ignore SIGINT, so
 a Ctrl-C in the terminal (sent to every process of the foreground group) reaches only the
@@ -15,22 +18,22 @@ own KeyboardInterrupt traceback.
 
 from __future__ import annotations
 
-import fcntl
 import os
 import signal
 import socket
-import tempfile
 import time
 from pathlib import Path
 from typing import Any
 
 from aerial_drake.dynamics.equilibrium import UnreachablePose
-from aerial_drake.simulation.runner import (
-    SimulationFailed,
-    SimulationInterrupted,
+from aerial_drake.simulation.kernel_cache import (
+    compile_in_child,
     compile_kernels,
-    run_scenario,
+    compile_lock,
+    kernels_cache_is_cold,
+    lock_path,
 )
+from aerial_drake.simulation.runner import SimulationFailed, SimulationInterrupted, run_scenario
 from aerial_drake.simulation.scenarios import ScenarioError
 from aerial_drake.studies.metrics_table import flatten_metrics
 from aerial_drake.studies.spec import scenario_from_text
@@ -39,21 +42,24 @@ _warm: list[bool] = []
 
 
 def warm_lock_path() -> Path:
-    """The machine's lock file for compiling the kernels (one per user)."""
-    return Path(tempfile.gettempdir()) / f"aerial_drake_kernels_{os.getuid()}.lock"
+    """The machine's lock file for compiling the kernels (one per user;
+    :func:`aerial_drake.simulation.kernel_cache.lock_path`)."""
+    return lock_path()
 
 
 def ensure_warm() -> None:
     """Compile or load the numba kernels once in this process, one process of the machine at
-    a time (module docstring)."""
+    a time (module docstring). On a cold cache the compile runs in a child process
+    (:func:`~aerial_drake.simulation.kernel_cache.compile_in_child`), so that the worker,
+    which then loads the cache, does not keep the compile's memory (about 200 MB) for all
+    its runs; a compile under way (a first ``aerial-drake run``'s in the background) is
+    waited for."""
     if _warm:
         return
-    with open(warm_lock_path(), "a") as lock:
-        fcntl.flock(lock.fileno(), fcntl.LOCK_EX)
-        try:
-            compile_kernels()
-        finally:
-            fcntl.flock(lock.fileno(), fcntl.LOCK_UN)
+    with compile_lock():
+        if kernels_cache_is_cold():
+            compile_in_child()
+        compile_kernels()  # loads them
     _warm.append(True)
 
 

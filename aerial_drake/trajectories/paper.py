@@ -29,6 +29,7 @@ real (non-string) field types of :class:`TrajectoryParams`.
 """
 
 import math
+import types
 import typing
 
 import numba
@@ -43,7 +44,8 @@ from aerial_drake.trajectories.reference import (
 )
 
 __all__ = ["TrajectoryParams", "PaperReference", "constants", "joint_targets",
-           "evaluate_reference", "sample_reference", "compile_reference"]
+           "evaluate_reference", "sample_reference", "compile_reference",
+           "use_interpreted_reference"]
 
 
 def joint_targets(params: TrajectoryParams, defaults=None) -> np.ndarray:
@@ -79,7 +81,7 @@ def evaluate_reference(params: TrajectoryParams, t: float, joint_defaults=None
     k = constants(params, joint_defaults)
     n_joints = k.size - _N_CONSTANTS
     packed = np.empty(packed_reference_size(n_joints))
-    _fill_reference(k, float(t), packed)
+    _kernels()[0](k, float(t), packed)
     com, task, heading = packed_slices(n_joints)
     return ReferenceSample.from_vectors(packed[com], packed[task], packed[heading])
 
@@ -97,7 +99,7 @@ def sample_reference(params: TrajectoryParams, times: np.ndarray, joint_defaults
         raise ValueError(f"times must be a 1-D array, got shape {times.shape}")
     n_joints = k.size - _N_CONSTANTS
     packed = np.empty((times.size, packed_reference_size(n_joints)))
-    _fill_reference_over_time(k, times, packed)
+    _kernels()[1](k, times, packed)
     com, task, heading = packed_slices(n_joints)
     return ReferenceSample.from_vectors(packed[:, com], packed[:, task], packed[:, heading])
 
@@ -111,16 +113,18 @@ class PaperReference(ReferenceSource):
     def __init__(self, params: TrajectoryParams, joint_defaults=None) -> None:
         self.constants = _constants(params, joint_defaults)
         super().__init__(self.constants.size - _N_CONSTANTS)
+        # Chosen once: compiled, or interpreted where this process must not compile.
+        self._fill, self._fill_over_time = _kernels()
 
     def fill(self, t: float, out: np.ndarray) -> None:
-        _fill_reference(self.constants, float(t), out)
+        self._fill(self.constants, float(t), out)
 
     def packed(self, times: np.ndarray) -> np.ndarray:
         times = np.asarray(times, dtype=float)
         if times.ndim != 1:
             raise ValueError(f"times must be a 1-D array, got shape {times.shape}")
         out = np.empty((times.size, self.size))
-        _fill_reference_over_time(self.constants, times, out)
+        self._fill_over_time(self.constants, times, out)
         return out
 
 
@@ -315,11 +319,47 @@ def _fill_reference_over_time(k: np.ndarray, times: np.ndarray, out: np.ndarray)
         _fill_reference(k, times[i], out[i])
 
 
+def _interpreted(kernel, **callees):
+    """``kernel``'s Python function with its calls to the ``callees`` (name: kernel) made to
+    their Python functions: nothing of it compiles."""
+    f = kernel.py_func
+    names = {**f.__globals__, **{name: callee for name, callee in callees.items()}}
+    return types.FunctionType(f.__code__, names, f.__name__, f.__defaults__, f.__closure__)
+
+
+_FILL_PY = _interpreted(_fill_reference, _sin_derivatives=_sin_derivatives.py_func,
+                        _cos_derivatives=_cos_derivatives.py_func)
+_FILL_OVER_TIME_PY = _interpreted(_fill_reference_over_time, _fill_reference=_FILL_PY)
+#: Set by :func:`use_interpreted_reference`.
+_INTERPRETED: list[bool] = []
+
+
+def use_interpreted_reference(interpreted: bool) -> None:
+    """From now on in this process, evaluate (28)-(33) as interpreted Python (about 30 us per
+    evaluation against 0.4 us compiled; the same doubles: IEEE arithmetic both, no fastmath,
+    tests/trajectories/test_paper.py) or compiled again: for a process that must not compile
+    (a cold cache's first run, :mod:`aerial_drake.simulation.kernel_cache`)."""
+    _INTERPRETED[:] = [True] if interpreted else []
+
+
+def _kernels() -> tuple:
+    """``(fill, fill_over_time)``: the compiled kernels, or their interpreted Python."""
+    if _INTERPRETED:
+        return _FILL_PY, _FILL_OVER_TIME_PY
+    return _fill_reference, _fill_reference_over_time
+
+
+#: Every ``(kernel, signature)`` a run calls from Python (compile_reference).
+_VECTOR = numba.types.Array(numba.types.float64, 1, "C")
+REFERENCE_KERNELS = (
+    (_fill_reference, (_VECTOR, numba.types.float64, _VECTOR)),
+    (_fill_reference_over_time, (_VECTOR, _VECTOR, numba.types.Array(numba.types.float64, 2, "C"))),
+)
+
+
 def compile_reference() -> None:
     """Compile the reference kernels into numba's cache, or load them from it, for the
     argument types a run passes (``simulation.runner.compile_kernels``)."""
-    vector = numba.types.Array(numba.types.float64, 1, "C")
-    _fill_reference.compile((vector, numba.types.float64, vector))
-    _fill_reference_over_time.compile(
-        (vector, vector, numba.types.Array(numba.types.float64, 2, "C")))
+    for kernel, signature in REFERENCE_KERNELS:
+        kernel.compile(signature)
 

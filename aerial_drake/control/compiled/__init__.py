@@ -22,11 +22,14 @@ The modules, bottom to top: :mod:`.views` (the decorators and the views of flat 
 kinematics), :mod:`.kernels` (Section II, the law and the tracking errors) and :mod:`.law` (the
 Python entry points, re-exported here: :class:`CompiledLaw`, :class:`CompiledTracking`,
 :func:`decompose`, :func:`pack_gains`, and :func:`compile_law` with :func:`law_cache_is_cold`
-for compiling before a run, :func:`aerial_drake.simulation.runner.compile_kernels`); the
-kernels are private.
-numba compiles them on first use and caches the machine code next to their files (``cache=True``),
-so only the first run after installing pays the compile time (about a minute on a 2-core
-machine; a note on stderr says so); later processes load the machine code in under a second.
+for compiling before a run, :func:`aerial_drake.simulation.runner.compile_kernels`, and
+:func:`use_reference_law` for a process that must not compile: a cold cache's first run,
+:mod:`aerial_drake.simulation.kernel_cache`); the kernels are private.
+numba compiles them on first use and caches the machine code next to their files (``cache=True``,
+or under ``NUMBA_CACHE_DIR``), so only the first use after installing pays the compile time
+(about 35 s to a minute on a 2-core machine; a note on stderr says so); later processes load
+the machine code in under a second. The command line's first run does not wait for it: see
+:mod:`aerial_drake.simulation.kernel_cache`.
 That compile's memory grows with the LLVM IR numba generates, much of it from two constructs the
 kernels therefore avoid: array-to-array slice assignment (see :func:`.linalg._copy`) and
 numba-level inlining of the functions that build the tuples of views (see
@@ -39,9 +42,13 @@ from aerial_drake.control.compiled.law import (
     CompiledTracking,
     compile_law,
     decompose,
+    is_cached,
     law_cache_is_cold,
     pack_gains,
+    reference_law_reason,
+    use_reference_law,
 )
 
 __all__ = ["ASSUMPTION_1", "ASSUMPTION_2", "NONFINITE", "OK", "CompiledLaw", "CompiledTracking",
-           "compile_law", "decompose", "law_cache_is_cold", "pack_gains"]
+           "compile_law", "decompose", "is_cached", "law_cache_is_cold", "pack_gains",
+           "reference_law_reason", "use_reference_law"]

@@ -63,12 +63,28 @@ def pack_gains(K, gravity: float) -> np.ndarray:
 
 
 def law_cache_is_cold() -> bool:
-    """Whether numba's cache holds no compiled law yet (the first use after installing)."""
+    """Whether numba's cache lacks a kernel :func:`compile_law` compiles (the first use after
+    installing, or after a change to the kernels' source): :func:`is_cached` of each."""
+    return not all(is_cached(kernel, signature) for kernel, signature in LAW_KERNELS)
+
+
+def is_cached(kernel, signature: tuple) -> bool:
+    """Whether the numba dispatcher ``kernel`` would load ``signature``'s machine code from
+    numba's cache rather than compile it: compiled in this process already, or its cache's
+    index (valid for the source file as it is now) names a data file that exists for this
+    machine's key (numba writes the index before the data, each by a rename: a compile
+    stopped between the two leaves an entry without data, which numba compiles again)."""
+    if tuple(signature) in kernel.overloads:
+        return True
     try:
-        # numba's internals (untyped): guarded by the except below.
-        return not os.path.exists(_law._cache._cache_file._index_path)  # type: ignore[attr-defined]
-    except AttributeError:  # numba internals moved: say warm (no note, no restart)
-        return False
+        # numba's internals (untyped, numba.core.caching): guarded by the except below.
+        cache = kernel._cache  # type: ignore[attr-defined]
+        key = cache._index_key(tuple(signature), kernel.targetctx.codegen())
+        cache_file = cache._cache_file
+        name = cache_file._load_index().get(key)
+        return name is not None and os.path.exists(os.path.join(cache_file._cache_path, name))
+    except (AttributeError, TypeError):  # numba internals moved: say cached (no note)
+        return True
 
 
 def _note_if_cold() -> None:
@@ -85,6 +101,10 @@ _LAW_SIGNATURE = (_F64,) * 7 + (types.Array(types.int64, 1, "C"), _F64)
 # The tracking errors': the states, references and output as C-contiguous 2-D float arrays.
 _F64_2D = types.Array(types.float64, 2, "C")
 _TRACKING_SIGNATURE = (_F64_2D,) * 5 + (_F64, types.Array(types.int64, 1, "C"), _F64)
+#: Every ``(kernel, signature)`` a run calls from Python, in the order compile_law compiles
+#: them (the law first: it is most of the time).
+LAW_KERNELS = ((_law, _LAW_SIGNATURE), (_tracking, _TRACKING_SIGNATURE),
+               (_workspace_size, (types.int64, types.int64, types.boolean)))
 
 
 def compile_law() -> None:
@@ -92,9 +112,28 @@ def compile_law() -> None:
     without a model: their argument types are the same for every tree
     (``simulation.runner.compile_kernels``; a test holds these signatures to what a run calls)."""
     _note_if_cold()
-    _law.compile(_LAW_SIGNATURE)
-    _tracking.compile(_TRACKING_SIGNATURE)
-    _workspace_size.compile((types.int64, types.int64, types.boolean))
+    for kernel, signature in LAW_KERNELS:
+        kernel.compile(signature)
+
+
+#: Set by :func:`use_reference_law`: controllers built afterwards in this process run the
+#: reference implementation (``control.controller``), and the tracking errors too.
+_REFERENCE_LAW: list[str] = []
+
+
+def use_reference_law(reason: str | None) -> None:
+    """From now on in this process, build controllers on the reference implementation (numpy
+    and Drake; the compiled law's results to round-off, not to the bit) and say ``reason``
+    (e.g. that numba's cache is cold); ``None``: the compiled law again."""
+    _REFERENCE_LAW.clear()
+    if reason is not None:
+        _REFERENCE_LAW.append(reason)
+
+
+def reference_law_reason() -> str | None:
+    """Why this process runs the reference implementation (:func:`use_reference_law`), or
+    None: the compiled law where it serves."""
+    return _REFERENCE_LAW[0] if _REFERENCE_LAW else None
 
 
 def _pack_law(tree: KinematicTree, num_positions: int,
