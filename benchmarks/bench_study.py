@@ -88,6 +88,10 @@ def memory_growth(count: int, duration: float) -> dict:
     return {"resident_mb": resident}
 
 
+def _hours(seconds: float) -> str:
+    return f"{seconds / 3600:.1f} h" if seconds >= 3600 else f"{seconds / 60:.0f} min"
+
+
 def _spread(values: list[float]) -> str:
     return f"{min(values):.1f}-{max(values):.1f}" if len(values) > 1 else f"{values[0]:.1f}"
 
@@ -160,7 +164,7 @@ def main() -> None:
     per_run_s = 60.0 / rates[n_max]
     print(f"a 10,000-run study of {args.duration:g} s runs at {rates[n_max]:.2f} runs per minute"
           f" per worker ({n_max} worker(s) here): "
-          + ", ".join(f"{w} workers {10000 * per_run_s / w / 3600:.1f} h" for w in
+          + ", ".join(f"{w} workers {_hours(10000 * per_run_s / w)}" for w in
                       (2, 8, 32, 128)) + " (the same rate per worker; start-up not counted)")
     if args.memory_runs:
         done = subprocess.run([sys.executable, __file__, "--memory", "--memory-runs",
