@@ -97,7 +97,13 @@ def solve_configuration(manip: AerialManipulator, *, p_WG: np.ndarray, R_WB: np.
         ik.AddOrientationConstraint(world, RotationMatrix(R_WE), manip.end_effector_frame,
                                     RotationMatrix(), 0.0)
     r = prog.NewContinuousVariables(3, "p_WG")
-    prog.AddConstraint(ComPositionConstraint(plant, None, world, ik.context()),
+    # The constraint gets a context of its own, not ik.context(): it sets the positions from
+    # the decision variables at each evaluation either way, and one that keeps ik's context
+    # alive ties the program into a cycle Python's collector cannot see (about 70 KB left
+    # behind per solve, measured on drake 1.58; a study's arm-hold bound solves dozens of
+    # postures per run).
+    com_context = plant.CreateDefaultContext()
+    prog.AddConstraint(ComPositionConstraint(plant, None, world, com_context),
                        np.concatenate([q, r]))
     prog.AddBoundingBoxConstraint(p_WG, p_WG, r)
     for index, angle in zip(task.joint_positions, q_j):

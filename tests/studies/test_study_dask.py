@@ -188,3 +188,22 @@ def test_show_run_reproduces_a_row_in_a_single_run(local_rows, tmp_path):
     assert kept
     for column in kept:
         assert row[column] == ("" if metrics[column] is None else repr(metrics[column]))
+
+
+def test_workers_that_restart_mid_study_record_every_run_once(monkeypatch, tmp_path):
+    """Where Drake keeps every run's diagram alive (drake 1.51.1), the local cluster's workers
+    retire and restart periodically (executor.WORKER_LIFETIME_S): forced here on one worker
+    with a lifetime of a few seconds, the study still records each run once, from more than
+    one worker process."""
+    import aerial_drake.drake_compat as compat
+    from aerial_drake.studies import executor
+    monkeypatch.setattr(compat, "python_systems_outlive_diagrams", lambda: True)
+    monkeypatch.setattr(executor, "WORKER_LIFETIME_S", 8.0)
+    monkeypatch.setattr(executor, "WORKER_LIFETIME_STAGGER_S", 0.0)
+    loaded = load_study(SMALL, duration=3.0, draws=12)  # 24 runs, some 0.5 s each
+    result = run_study(loaded, tmp_path, workers=1, progress=False)
+    assert result.complete and result.ran == 24
+    rows = read_table(result.table)
+    assert sorted(r["run_id"] for r in rows) == sorted(r.run_id for r in plan_runs(loaded))
+    assert all(r["completed"] in (True, "True", "true", 1, "1") for r in rows), rows
+    assert len({r["worker"] for r in rows}) >= 2  # it restarted, as a new process
