@@ -279,9 +279,8 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
         builder.Connect(reference.GetOutputPort(port), controller.GetInputPort(port))
         outputs[port] = reference.GetOutputPort(port)
     if isinstance(controller, ControllerBase):
-        # Its ports are the generator's, which outputs source.fill at the context's time: the
-        # controller evaluates the source itself at each sample, the same doubles without a
-        # Python callback and three port evaluations per sample (docs/performance.md).
+        # The generator outputs source.fill at the context's time: the controller evaluates it
+        # itself, the same doubles without three port evaluations (docs/performance.md).
         controller.read_references_from(source)
 
     state_out = plant.get_state_output_port()
@@ -311,8 +310,7 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
 
     # (2): thrust along body z and body torques, at the helicopter frame; joint torques.
     base_forces = connect_actuation(builder, sim, base_cmd, joint_cmd)
-    # Disturbances: at the helicopter frame as a generalized force, at the end effector as a
-    # spatial force at the end-effector point.
+    # Disturbances: at the vehicle frame (generalized force), at the end-effector point.
     to_generalized = builder.AddSystem(MatrixGain(free_body_wrench_map(plant.num_velocities())))
     to_generalized.set_name("vehicle_wrench_to_generalized_force")
     builder.Connect(to_generalized.get_output_port(),
