@@ -9,9 +9,7 @@ workspace, the same outputs and diagnostics):
 
 - Section II by :func:`.fast_section2._fast_transformation`: T^-1 in closed form from T's
   blocks instead of Gaussian elimination on T, one Cholesky factorisation of Z M Z^T for N
-  and N_dot (the exact kernel factors it twice), and N_dot never formed: T_dot u for the
-  four vectors u = T^-1 b the law needs by :func:`.fast_section2._t_dot_times`, with
-  N u = b's last rows.
+  and N_dot (the exact kernel factors it twice).
 - J = J_y T^-1 (17) through T^-1's zero blocks and its last columns Z^T.
 - J_3's LU factorisation and three solves instead of forming J_3^-1 (the damped inverse of
   paper_plus is formed as in the exact kernel); u3 = J_3^T (J_3^-T lg - K_z z~) (19)-(21) as
@@ -37,7 +35,6 @@ from aerial_drake.control.compiled.fast_section2 import (
     _fast_transformation,
     _lu_factor,
     _lu_solve,
-    _t_dot_times,
 )
 from aerial_drake.control.compiled.kernels import (
     _D_X,
@@ -145,7 +142,7 @@ def _law_fast(x, com, task, heading, command, diagnostics, model, index, work):
     _kinematics(q, tree, s)
     m, base = _body_sums(v, tree, s)
     _fast_transformation(v, s.R_all[base], s)
-    R, M, C, T, T_inv = s.R_all[base], s.M, s.C, s.T, s.T_inv
+    R, M, C, T, T_dot, T_inv = s.R_all[base], s.M, s.C, s.T, s.T_dot, s.T_inv
     xi = w.xi
     _mv_into(T, v, xi)
     gains = p.gains
@@ -213,7 +210,7 @@ def _law_fast(x, com, task, heading, command, diagnostics, model, index, work):
     # u2 = Lambda22 w_b_dot + Gamma22 w_b (16), and Gamma23 rho of (8) with it.
     u_b, T_dot_u = w.u[0], w.u[3]  # T^-1 [0; w_b; rho]
     _mv_into(T_inv, xi[3:], u_b, 3)
-    _t_dot_times(s, u_b, rho, False, T_dot_u)
+    _mv_into(T_dot, u_b, T_dot_u)
     _lambda_gamma_times(M, C, T_inv, w_b_dot, 3, u_b, T_dot_u, w.u2_rho, 3, w.vnv)
 
     # Task kinematics: the end-effector frame E on body ee_body, and the task's joints.
@@ -292,7 +289,7 @@ def _law_fast(x, com, task, heading, command, diagnostics, model, index, work):
     _mv_into(Jt, a12, Ja12)
     u_x12 = w.u[1]
     _mv_into(T_inv, xi[:6], u_x12)
-    _t_dot_times(s, u_x12, rho, True, T_dot_u)
+    _mv_into(T_dot, u_x12, T_dot_u)
     _jt_dot_times(J_y_dot, Jt, u_x12, T_dot_u, jt_dot_x12, w.vn[17])
     for i in range(n):
         z_d_dot[i] = y_d_ddot[i] - Ja12[i] - jt_dot_x12[i] - K_y[i] * y_t_dot[i]  # (20)
@@ -309,7 +306,7 @@ def _law_fast(x, com, task, heading, command, diagnostics, model, index, work):
     _j3_solve(J3_inv, piv, damped, z_d, s_d)  # s = J3^-1 z_d
     u_s = w.u[2]  # T^-1 [0; 0; s]
     _mv_into(T_inv, s_d, u_s, 6)
-    _t_dot_times(s, u_s, s_d, False, T_dot_u)
+    _mv_into(T_dot, u_s, T_dot_u)
     _jt_dot_times(J_y_dot, Jt, u_s, T_dot_u, J3_dot_s, w.vn[17])
     # Lambda_z z_d_dot + Gamma_z z_d
     #   = J3^-T (Lambda33 J3^-1 (z_d_dot - J3_dot s) + Gamma33 s).
@@ -325,7 +322,7 @@ def _law_fast(x, com, task, heading, command, diagnostics, model, index, work):
     for i in range(n):
         ws[3 + i] = s_d[i]
     _mv_into(T_inv, ws, u_ws, 3)
-    _t_dot_times(s, u_ws, s_d, False, T_dot_u)
+    _mv_into(T_dot, u_ws, T_dot_u)
     _lambda_gamma_times(M, C, T_inv, a3, 6, u_ws, T_dot_u, lg, 6, w.vnv)
     # u3 = J3^T (J3^-T lg - K_z z~) = lg - J3^T K_z z~: the product J3^T J3^-T as the
     # identity, as the exact kernel does for the damped law (damped or not, here); u3 here

@@ -108,12 +108,9 @@ def _structured_inverse(R, J_g, N, Y, T_inv):
 
 @_jit
 def _fast_transformation(v, R, s):
-    """T of (3) with N of (4) as its last rows, T_dot's first six rows, and T^-1, into
+    """T of (3) with N of (4) as its last rows, its derivative (N_dot last), and T^-1, into
     ``s.T``, ``s.T_dot``, ``s.T_inv`` (Section II's buffers, as the exact
-    :func:`.kernels._transformation`); leaves Z M Z^T = Lambda_33 in ``s.ZZ[0]``, its Cholesky
-    factor in ``s.ZZ[1]`` and N_dot's parts (:func:`_t_dot_times`) in ``s.Z[1]`` and
-    ``s.ZZ[4]``. N_dot itself (T_dot's last rows) is not formed: the law needs only
-    T_dot u for four vectors u, cheaper through its parts than through the matrix."""
+    :func:`.kernels._transformation`); leaves Z M Z^T = Lambda_33 in ``s.ZZ[0]``."""
     T, T_dot, J_g, J_g_dot = s.T, s.T_dot, s.J_g, s.J_g_dot
     _copy(J_g, T[:3])
     _copy(J_g_dot, T_dot[:3])
@@ -134,7 +131,7 @@ def _fast_transformation(v, R, s):
 
     ZM, ZdM, ZMd = s.Z[0], s.Z[1], s.Z[2]
     ZMZ, L, a, b = s.ZZ[0], s.ZZ[1], s.ZZ[2], s.ZZ[3]
-    N = T[6:]
+    N, N_dot = T[6:], T_dot[6:]
     _z_times_into(J_g, s.M, True, ZM)
     _times_zt_into(ZM, J_g, True, ZMZ)
     _cholesky_into(ZMZ, L)
@@ -148,49 +145,16 @@ def _fast_transformation(v, R, s):
     _z_times_into(J_g, M_dot, True, ZMd)
     _times_zt_into(ZdM, J_g, True, a)  # Z_dot M Z^T; Z M Z_dot^T is its transpose
     _times_zt_into(ZMd, J_g, True, b)  # Z M_dot Z^T
-    # N_dot = (Z M Z^T)^-1 (W - D N) with W = Z_dot M + Z M_dot and D = d/dt (Z M Z^T).
-    n, D = N.shape[0], s.ZZ[4]
+    n = N.shape[0]
     for i in range(n):
         for j in range(nv):
-            ZdM[i, j] += ZMd[i, j]
+            N_dot[i, j] = ZdM[i, j] + ZMd[i, j]
         for k in range(n):
-            D[i, k] = (a[i, k] + b[i, k]) + a[k, i]
-    _structured_inverse(R, J_g, N, ZMd, s.T_inv)
-
-
-@_jit
-def _t_dot_times(s, u, Nu, zero_Nu, out):
-    """out = T_dot u from :func:`_fast_transformation`'s parts: its first six rows by T_dot's,
-    the last n as N_dot u = (Z M Z^T)^-1 (W u - D (N u)), given ``Nu`` = N u (for
-    u = T^-1 b, N u is b's last n entries, as N T^-1 = [0, E]; ``zero_Nu``: zero)."""
-    T_dot, W, D, L = s.T_dot, s.Z[1], s.ZZ[4], s.ZZ[1]
-    nv = u.shape[0]
-    n = nv - 6
-    for i in range(3):
-        t = 0.0
-        for j in range(nv):
-            t += T_dot[i, j] * u[j]
-        out[i] = t
-    for i in range(3, 6):  # J_bw_dot = [-hat(w_b) R^T, 0, 0]
-        out[i] = T_dot[i, 0] * u[0] + T_dot[i, 1] * u[1] + T_dot[i, 2] * u[2]
-    for i in range(n):
-        t = 0.0
-        for j in range(nv):
-            t += W[i, j] * u[j]
-        if not zero_Nu:
-            for k in range(n):
-                t -= D[i, k] * Nu[k]
-        out[6 + i] = t
-    for i in range(n):  # (L L^T)^-1, L the Cholesky factor of Z M Z^T
-        t = out[6 + i]
-        for k in range(i):
-            t -= L[i, k] * out[6 + k]
-        out[6 + i] = t / L[i, i]
-    for i in range(n - 1, -1, -1):
-        t = out[6 + i]
-        for k in range(i + 1, n):
-            t -= L[k, i] * out[6 + k]
-        out[6 + i] = t / L[i, i]
+            f = (a[i, k] + b[i, k]) + a[k, i]
+            for j in range(nv):
+                N_dot[i, j] -= f * N[k, j]
+    _cholesky_solve(L, N_dot)
+    _structured_inverse(R, J_g, N, ZdM, s.T_inv)
 
 
 # --- J_3's LU factorisation, for the fast law's solves with J_3 -----------------------------
