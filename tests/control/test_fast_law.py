@@ -138,6 +138,9 @@ def test_the_default_kernel_is_exact_and_the_option_reaches_the_law():
     plus = load_scenario("nominal", overrides={"controller.kernel": "fast",
                                                "controller.type": "paper_plus"})
     assert build_closed_loop(plus).controller._law._compiled.kernel == "fast"
+    # Built, the fast kernel is in numba's cache; the cold check counts it only when asked.
+    assert not compiled.law_cache_is_cold(("fast",))
+    assert len(compiled.law.LAW_KERNELS) + 1 == len(compiled.law._law_kernels(("fast",)))
 
 
 @pytest.mark.parametrize("overrides, match", [

@@ -118,7 +118,7 @@ class ControllerConfig:
     plus: PlusParams = field(default_factory=PlusParams)
     # The compiled law's kernel (used by "paper" and "paper_plus"; docs/control.md, "The fast
     # kernel"): "exact" (the paper runs' arithmetic, bit for bit) or "fast" (the same law to
-    # round-off, about a third faster; compiled the first time it is chosen).
+    # round-off, about a tenth faster; compiled the first time it is chosen).
     kernel: str = LAW_KERNELS[0]
 
 
