@@ -13,7 +13,7 @@ largest single cost of Section II. Here:
 - T^-1 in closed form from T's blocks (docs/control.md, "The fast kernel"). Z's rows span
   the null space of K = [J_g; J_bw] and N Z^T = E_n, so T^-1 = [X, Z^T] with
   X = (E - Z^T N) X0 for any X0 with K X0 = E_6. With J_g = [G_w, E_3, A] (the columns of
-  w_WB, v_WBo and the arm; design note math.md, Section 2) and J_bw = [R^T, 0, 0],
+  w_WB, v_WBo and the arm; docs/control.md, "Coordinates") and J_bw = [R^T, 0, 0],
   X0 = [[0, R], [E_3, -G_w R], [0, 0]], so with Y = N X0 = [N_v, (N_w - N_v G_w) R]
   (N_w, N_v: N's first two 3-column blocks),
   T^-1 = [[0, R, 0], [E_3 + A Y_1, -G_w R + A Y_2, -A], [-Y_1, -Y_2, E_n]].
