@@ -15,6 +15,7 @@ from aerial_drake.control.compiled.fast_section2 import (
     _cholesky_solve,
     _lu_factor,
     _lu_solve,
+    _min_eigenvalue_laguerre,
     _structured_inverse,
 )
 from aerial_drake.control.compiled.kernels import _law
@@ -155,3 +156,30 @@ def test_a_bad_kernel_is_refused_naming_the_field_and_the_fix(overrides, match):
     with pytest.raises(ScenarioError, match=match) as err:
         load_scenario("nominal", overrides=overrides)
     assert err.value.field == "controller.kernel"
+
+
+def test_laguerre_min_eigenvalue_matches_numpy():
+    """The fast kernel's smallest eigenvalue (Laguerre's iteration) on the exact kernel's test
+    cases (tests/control/test_compiled.py): a spread, a tiny, a double or a zero smallest
+    eigenvalue, indefinite matrices; a few rounding units of the norm; nan when not finite."""
+    rng = np.random.default_rng(7)
+    work = np.empty((4, 7))
+    for k in range(400):
+        J = rng.normal(size=(7, 7))
+        U, _, Vt = np.linalg.svd(J)
+        s = np.sort(rng.uniform(0.1, 3.0, 7))
+        if k % 4 == 1:
+            s[0] = 10.0 ** rng.uniform(-8, 0)
+        elif k % 4 == 2:
+            s[1] = s[0]
+        elif k % 4 == 3:
+            s[0] = 0.0
+        S = (U * s) @ Vt
+        S = S.T @ S if k % 8 < 4 else 0.5 * (J + J.T)  # half positive semi-definite
+        expected = np.linalg.eigvalsh(S)[0]
+        got = _min_eigenvalue_laguerre(S.copy(), work)
+        assert abs(got - expected) <= 1e-14 * np.linalg.norm(S, 2), k
+    assert _min_eigenvalue_laguerre(np.array([[2.5]]), work) == 2.5
+    S = np.eye(7)
+    S[2, 3] = S[3, 2] = np.nan
+    assert np.isnan(_min_eigenvalue_laguerre(S, work))

@@ -10,7 +10,9 @@ workspace, the same outputs and diagnostics):
 - Section II by :func:`.fast_section2._fast_transformation`: T^-1 in closed form from T's
   blocks instead of Gaussian elimination on T, one Cholesky factorisation of Z M Z^T for N
   and N_dot (the exact kernel factors it twice).
-- J = J_y T^-1 (17) through T^-1's zero blocks and its last columns Z^T.
+- J = J_y T^-1 (17) through T^-1's zero blocks and its last columns Z^T; sigma_min(J_3) with
+  Laguerre's iteration in place of Newton's on the same tridiagonal reduction
+  (:func:`.fast_section2._min_eigenvalue_laguerre`: a handful of steps instead of ten).
 - J_3's LU factorisation and three solves instead of forming J_3^-1 (the damped inverse of
   paper_plus is formed as in the exact kernel); u3 = J_3^T (J_3^-T lg - K_z z~) (19)-(21) as
   lg - J_3^T K_z z~ (the exact kernel's form for the damped law), without J_3^-T.
@@ -35,6 +37,7 @@ from aerial_drake.control.compiled.fast_section2 import (
     _fast_transformation,
     _lu_factor,
     _lu_solve,
+    _min_eigenvalue_laguerre,
 )
 from aerial_drake.control.compiled.kernels import (
     _D_X,
@@ -76,7 +79,6 @@ from aerial_drake.control.compiled.linalg import (
     _cross_into,
     _dot,
     _hat_into,
-    _min_eigenvalue_sym,
     _mm_into,
     _mtm_into,
     _mtv_into,
@@ -112,7 +114,7 @@ def _fast_sigma_min_J3(J_y, T_inv, w):
             Jt[i, 6 + k] = t
             J3[i, k] = t
     _mtm_into(J3, J3, w.JtJ)
-    return math.sqrt(max(_min_eigenvalue_sym(w.JtJ, w.vn[13:17]), 0.0))
+    return math.sqrt(max(_min_eigenvalue_laguerre(w.JtJ, w.vn[13:17]), 0.0))
 
 
 @_inline

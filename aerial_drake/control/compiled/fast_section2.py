@@ -1,6 +1,7 @@
 """Section II's transformation (3)-(4) for the fast law (:mod:`.fast_law`): the exact kernel's
 quantities T, T_dot and T^-1, by formulas that exploit their structure (so equal to the exact
-kernel's to round-off, not to the bit).
+kernel's to round-off, not to the bit); and the fast law's small solvers (J_3's LU, the
+smallest eigenvalue of J_3^T J_3 by Laguerre's iteration).
 
 The exact kernel (:func:`.kernels._transformation`) follows the numpy reference: it factors
 Z M Z^T twice (for N and for N_dot) and inverts T (nv x nv) by Gaussian elimination, the
@@ -24,7 +25,7 @@ from __future__ import annotations
 import math
 
 from aerial_drake.control.compiled.kernels import _times_zt_into, _z_times_into
-from aerial_drake.control.compiled.linalg import _copy
+from aerial_drake.control.compiled.linalg import _copy, _has_eigenvalue_below, _tridiagonalize
 from aerial_drake.control.compiled.views import _jit
 
 
@@ -205,3 +206,58 @@ def _lu_solve(LU, piv, b, out):
         for k in range(i + 1, n):
             t -= LU[i, k] * out[k]
         out[i] = t / LU[i, i]
+
+
+# --- sigma_min(J_3) for the fast law ------------------------------------------------------------
+
+@_jit
+def _laguerre_step(d, e, x):
+    """Laguerre's step at x for c(x) = det(T - x E) of the tridiagonal T (diagonal d,
+    off-diagonal e), from the three-term recurrence of its leading minors and their first two
+    derivatives. From below the smallest eigenvalue it moves up to it, cubically: a handful
+    of steps where Newton's (linalg._min_eigenvalue_sym) takes ten on J_3^T J_3's clustered
+    smallest eigenvalues."""
+    n = d.shape[0]
+    c0, c1 = 1.0, d[0] - x
+    g0, g1 = 0.0, -1.0  # c'
+    h0, h1 = 0.0, 0.0  # c''
+    for k in range(1, n):
+        b2 = e[k - 1] * e[k - 1]
+        c2 = (d[k] - x) * c1 - b2 * c0
+        g2 = (d[k] - x) * g1 - c1 - b2 * g0
+        h2 = (d[k] - x) * h1 - 2.0 * g1 - b2 * h0
+        c0, c1, g0, g1, h0, h1 = c1, c2, g1, g2, h1, h2
+    if c1 == 0.0:
+        return 0.0
+    G = g1 / c1
+    H = G * G - h1 / c1
+    root = math.sqrt(max((n - 1) * (n * H - G * G), 0.0))
+    den = G - root if G < 0.0 else G + root
+    return -n / den if den != 0.0 else 0.0
+
+
+@_jit
+def _min_eigenvalue_laguerre(S, work):
+    """As :func:`.linalg._min_eigenvalue_sym` (S overwritten, nan if not finite; ``work``: four
+    vectors of S's size), Laguerre's iteration in place of Newton's (the same root, to
+    rounding)."""
+    n = S.shape[0]
+    for i in range(n):
+        for j in range(n):
+            if not math.isfinite(S[i, j]):
+                return math.nan
+    d, e = work[0], work[1]
+    if n == 1:
+        return S[0, 0]
+    _tridiagonalize(S, d, e, work[2], work[3])
+    x = 0.0
+    if _has_eigenvalue_below(d, e, 0.0):
+        x = min(d[0] - abs(e[0]), d[n - 1] - abs(e[n - 2]))
+        for k in range(1, n - 1):
+            x = min(x, d[k] - abs(e[k - 1]) - abs(e[k]))
+    for _ in range(100):
+        x_next = x + _laguerre_step(d, e, x)
+        if not x_next > x:
+            break
+        x = x_next
+    return x
