@@ -32,7 +32,7 @@ ControllerFactory = Callable[[Any, AerialManipulator], object]
 PAPER_CONTROLLER = "paper"
 #: ``controller.kernel``: the paper law's compiled kernels (``paper`` and ``paper_plus``),
 #: ``exact`` the default (:data:`aerial_drake.control.compiled.law.LAW_KERNEL_NAMES`).
-LAW_KERNELS = ("exact", "fast")
+LAW_KERNEL_CHOICES = ("exact", "fast")
 #: Where a baseline's attitude inertia comes from, as its gain-design warning says.
 LOCKED_SOURCE = "(the robot locked at its start, principal moments)"
 
