@@ -14,6 +14,10 @@ Pinocchio computing, on the same states, the rigid-body quantities the law compu
 tests hold the law against (``tests/paper_oracles.PinocchioModel``, built from the Drake plant's
 parameters).
 
+The same rounds time the law's fast kernel (``controller.kernel: fast``,
+:mod:`aerial_drake.control.compiled.fast_law`: the same law to round-off) on the same inputs,
+and its Section II, and print fast / exact and fast law / Pinocchio.
+
 The machine's speed drifts: compare two versions of the law in one process, alternating
 (e.g. with this script's ``time_calls`` on both), not across runs.
 """
@@ -33,6 +37,8 @@ import numpy as np
 PINOCCHIO = "Pinocchio rigid-body calls"
 RIGID_BODY = "the law's rigid-body part"
 SECTION_II = "the law's Section II"
+FAST = "fast kernel CompiledLaw.__call__"
+FAST_SECTION_II = "the fast kernel's Section II"
 #: Where the Pinocchio model of a Drake plant is built (shared with the oracle tests).
 TESTS = Path(__file__).resolve().parent.parent / "tests"
 
@@ -103,12 +109,14 @@ def pinocchio_calls(controller, inputs):
 
 
 def law_phases(controller):
-    """Two callables on the law's inputs: the compiled law's rigid-body part (kinematics and
-    the body sums: M, C, every body's Jacobian and its derivative, J_g, J_g_dot, the CoM) and
-    its Section II (that and the transformation (3)-(4): T, T^-1, N, N_dot), run alone with
-    the law's own kernels in its workspace (the law's arithmetic; the outputs discarded)."""
+    """Three callables on the law's inputs: the compiled law's rigid-body part (kinematics
+    and the body sums: M, C, every body's Jacobian and its derivative, J_g, J_g_dot, the CoM),
+    its Section II (that and the transformation (3)-(4): T, T^-1, N, N_dot), and the fast
+    kernel's Section II, run alone with the law's own kernels in its workspace (the law's
+    arithmetic; the outputs discarded)."""
     from numba import njit
 
+    from aerial_drake.control.compiled.fast_section2 import _fast_transformation
     from aerial_drake.control.compiled.kernels import (
         _body_sums,
         _law_buffers,
@@ -125,20 +133,40 @@ def law_phases(controller):
         q, v = x[:p.nq], x[p.nq:]
         _kinematics(q, tree, s)
         m, base = _body_sums(v, tree, s)
-        if section2:
+        if section2 == 1:
             _transformation(v, s.R_all[base], s)
+        elif section2 == 2:
+            _fast_transformation(v, s.R_all[base], s)
         return m
 
     law = controller._compiled
     work = np.zeros_like(law._work)  # not the law's: its buffers stay as the law left them
 
     def rigid_body_part(x, com, task, heading):
-        phase(x, law._model, law._index, work, False)
+        phase(x, law._model, law._index, work, 0)
 
     def section_ii(x, com, task, heading):
-        phase(x, law._model, law._index, work, True)
+        phase(x, law._model, law._index, work, 1)
 
-    return rigid_body_part, section_ii
+    def fast_section_ii(x, com, task, heading):
+        phase(x, law._model, law._index, work, 2)
+
+    return rigid_body_part, section_ii, fast_section_ii
+
+
+def fast_kernel(controller, command, diagnostics):
+    """The law's fast kernel on the controller's model and gains (a CompiledLaw of its own),
+    as a callable on the law's inputs."""
+    from aerial_drake.control.controller import DecoupledController
+
+    twin = DecoupledController(controller._plant, controller._frame, controller._task,
+                               controller._gains, **controller._limits, kernel="fast")
+    law = twin._compiled
+
+    def kernel(x, com, task, heading):
+        law(x, com, task, heading, command, diagnostics)
+
+    return kernel
 
 
 def _load() -> str:
@@ -176,21 +204,25 @@ def main() -> None:
             law(x, com, task, heading, command, diagnostics)
 
         subjects[name] = (controller, inputs, kernel, pinocchio_calls(controller, inputs),
-                          law_phases(controller))
+                          law_phases(controller),
+                          fast_kernel(controller, np.empty_like(command),
+                                      np.empty_like(diagnostics)))
 
     print(f"machine: {platform.machine()}, {platform.processor() or platform.platform()}, "
           f"python {platform.python_version()}, load average {_load()}")
     per_round = max(args.calls // args.rounds, 20)
-    kinds = ("CompiledLaw.__call__", "DecoupledController.evaluate", RIGID_BODY, SECTION_II,
-             PINOCCHIO)
+    kinds = ("CompiledLaw.__call__", FAST, "DecoupledController.evaluate", RIGID_BODY,
+             SECTION_II, FAST_SECTION_II, PINOCCHIO)
     times: dict = {(name, kind): [] for name in subjects for kind in kinds}
     for _ in range(args.rounds):  # interleaved: each robot and each subject in every round
-        for name, (controller, inputs, kernel, pin_calls, phases) in subjects.items():
+        for name, (controller, inputs, kernel, pin_calls, phases, fast) in subjects.items():
             for kind, evaluate, on in (("CompiledLaw.__call__", kernel, inputs),
+                                       (FAST, fast, inputs),
                                        ("DecoupledController.evaluate", controller.evaluate,
                                         inputs),
                                        (RIGID_BODY, phases[0], inputs),
                                        (SECTION_II, phases[1], inputs),
+                                       (FAST_SECTION_II, phases[2], inputs),
                                        (PINOCCHIO, *(pin_calls or (None, None)))):
                 if evaluate is not None:
                     times[name, kind].append(1e6 * time_calls(evaluate, on, per_round))
@@ -209,12 +241,19 @@ def main() -> None:
             other = np.median(np.concatenate(times[name, "CompiledLaw.__call__"]))
             print(f"kernel time {name} / {first}: {other / base:.3f}")
     for name in subjects:
+        exact_chunks, fast_chunks = times[name, "CompiledLaw.__call__"], times[name, FAST]
+        ratio = np.median(np.concatenate(fast_chunks)) / np.median(np.concatenate(exact_chunks))
+        per_round = [np.median(a) / np.median(b) for a, b in zip(fast_chunks, exact_chunks)]
+        print(f"{name}: fast kernel / exact kernel: {ratio:.2f} (per round "
+              f"{np.percentile(per_round, 10):.2f}-{np.percentile(per_round, 90):.2f}, "
+              "10th-90th percentile)")
+    for name in subjects:
         pin_chunks = times[name, PINOCCHIO]
         if not pin_chunks:
             print(f"{name}: law / Pinocchio not measured: Pinocchio (pip package 'pin', in the "
                   "test extra) is not installed")
             continue
-        for kind, what in (("CompiledLaw.__call__", "law"),
+        for kind, what in (("CompiledLaw.__call__", "law"), (FAST, "fast law"),
                            (RIGID_BODY, "the law's rigid-body part")):
             law_chunks = times[name, kind]
             # The ratio of the medians, and its spread over the rounds (each round's medians).

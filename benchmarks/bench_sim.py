@@ -13,6 +13,11 @@ process of their own, so every timed run is one with numba's cache filled; the f
 after installing is measured apart (docs/performance.md, Memory).
 
     python benchmarks/bench_sim.py [--repeats 3] [--duration 15] [--scenarios nominal disturbed]
+                                   [--kernels exact fast]
+
+``--kernels``: the compiled law's kernels (the scenario's ``controller.kernel``) to time, one
+row each (``nominal/fast``), their closed-loop runs alternating with the zero-controller and
+plant-alone runs they are compared with (default: the exact kernel only).
 """
 
 from __future__ import annotations
@@ -30,12 +35,14 @@ import time
 import numpy as np
 
 
-def worker(scenario_name: str, duration: float, zero: bool, plant: bool = False) -> dict:
+def worker(scenario_name: str, duration: float, zero: bool, plant: bool = False,
+           kernel: str = "exact") -> dict:
     from aerial_drake.control.registry import zero_controller
     from aerial_drake.simulation.runner import run_scenario
     from aerial_drake.simulation.scenarios import load_scenario
 
-    scenario = load_scenario(scenario_name, overrides={"duration": duration})
+    scenario = load_scenario(scenario_name, overrides={"duration": duration,
+                                                       "controller.kernel": kernel})
     if plant:
         from bench_plant import plant_alone
 
@@ -70,8 +77,10 @@ def _controller_time(scenario, result, samples: int = 1000) -> float:
     return 1e6 * statistics.median(times)
 
 
-def run_worker(name: str, duration: float, zero: bool, plant: bool = False) -> dict:
-    cmd = [sys.executable, __file__, "--worker", name, "--duration", str(duration)]
+def run_worker(name: str, duration: float, zero: bool, plant: bool = False,
+               kernel: str = "exact") -> dict:
+    cmd = [sys.executable, __file__, "--worker", name, "--duration", str(duration),
+           "--kernel", kernel]
     if zero:
         cmd.append("--zero")
     if plant:
@@ -92,9 +101,13 @@ def main() -> None:
     parser.add_argument("--worker", help=argparse.SUPPRESS)
     parser.add_argument("--zero", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--plant", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--kernels", nargs="+", default=["exact"], choices=["exact", "fast"],
+                        help="the compiled law's kernels to time (controller.kernel)")
+    parser.add_argument("--kernel", default="exact", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.worker:
-        print(json.dumps(worker(args.worker, args.duration, args.zero, args.plant)))
+        print(json.dumps(worker(args.worker, args.duration, args.zero, args.plant,
+                                args.kernel)))
         return
 
     print(f"machine: {platform.machine()}, {platform.platform()}, python "
@@ -102,28 +115,34 @@ def main() -> None:
     header = (f"{'scenario':>10} {'wall (s)':>9} {'RT factor':>10} {'ctrl (us)':>10} "
               f"{'zero-ctrl wall':>15} {'ratio':>6} {'plant wall':>11} "
               f"{'loop/plant (p10-p90)':>21} {'peak RSS (MB)':>14}")
-    compile_first = "from aerial_drake.simulation.runner import compile_kernels; compile_kernels()"
+    compile_first = ("from aerial_drake.simulation.runner import compile_kernels; "
+                     "compile_kernels(); from aerial_drake.control.compiled.law import "
+                     f"compile_law; compile_law({tuple(args.kernels)!r})")
     subprocess.run([sys.executable, "-c", compile_first], check=True)
     print(f"load average before: {_load()}")
     print(header)
     for name in args.scenarios:
         # Alternating, so that the medians see the same drift of the machine's speed; each
         # ratio is of runs next to each other in time.
-        full, zero, plant = [], [], []
+        fulls: dict = {kernel: [] for kernel in args.kernels}
+        zero, plant = [], []
         for _ in range(args.repeats):
-            full.append(run_worker(name, args.duration, False))
+            for kernel, full in fulls.items():
+                full.append(run_worker(name, args.duration, False, kernel=kernel))
             zero.append(run_worker(name, args.duration, True))
             plant.append(run_worker(name, args.duration, False, plant=True))
-        wall = statistics.median(r["wall_s"] for r in full)
         zwall = statistics.median(r["wall_s"] for r in zero)
         pwall = statistics.median(r["wall_s"] for r in plant)
-        ratios = [f["wall_s"] / p["wall_s"] for f, p in zip(full, plant)]
-        spread = f"{statistics.median(ratios):.2f} ({np.percentile(ratios, 10):.2f}-" \
-                 f"{np.percentile(ratios, 90):.2f})"
-        print(f"{name:>10} {wall:9.2f} {args.duration / wall:10.2f} "
-              f"{statistics.median(r['controller_us'] for r in full):10.1f} "
-              f"{zwall:15.2f} {wall / zwall:6.2f} {pwall:11.2f} {spread:>21} "
-              f"{max(r['peak_rss_mb'] for r in full):14.0f}", flush=True)
+        for kernel, full in fulls.items():
+            wall = statistics.median(r["wall_s"] for r in full)
+            ratios = [f["wall_s"] / p["wall_s"] for f, p in zip(full, plant)]
+            spread = f"{statistics.median(ratios):.2f} ({np.percentile(ratios, 10):.2f}-" \
+                     f"{np.percentile(ratios, 90):.2f})"
+            label = name if args.kernels == ["exact"] else f"{name}/{kernel}"
+            print(f"{label:>10} {wall:9.2f} {args.duration / wall:10.2f} "
+                  f"{statistics.median(r['controller_us'] for r in full):10.1f} "
+                  f"{zwall:15.2f} {wall / zwall:6.2f} {pwall:11.2f} {spread:>21} "
+                  f"{max(r['peak_rss_mb'] for r in full):14.0f}", flush=True)
     print(f"load average after: {_load()}")
 
 if __name__ == "__main__":

@@ -15,7 +15,7 @@ from typing import Callable, Iterator
 RESTARTED = "AERIAL_DRAKE_RESTARTED_AFTER_COMPILE"
 
 
-def compile_first(restartable: bool) -> None:
+def compile_first(restartable: bool, law_kernels: tuple[str, ...] = ()) -> None:
     """On the first run after installing, compile the numba kernels, then restart the command.
 
     numba keeps what compiling the control law allocated (about 200 MB) for the rest of the
@@ -30,19 +30,20 @@ def compile_first(restartable: bool) -> None:
     Nothing to do when the cache is warm, when ``restartable`` is false
     (:func:`aerial_drake.cli.main` called from Python with arguments: never replace a
     caller's process), or off POSIX; if the cache could not be written, the run goes on
-    here."""
+    here. ``law_kernels``: the run's law kernels beyond the default (a scenario's
+    ``controller.kernel``, :func:`aerial_drake.simulation.kernel_cache.compile_kernels`)."""
     if not restartable or os.environ.get(RESTARTED) or os.name != "posix":
         return
     from aerial_drake.simulation import kernel_cache
-    if not kernel_cache.kernels_cache_is_cold():
+    if not kernel_cache.kernels_cache_is_cold(law_kernels):
         return
     with kernel_cache.compile_lock(stream=sys.stderr):  # waits for a compile under way
-        if not kernel_cache.kernels_cache_is_cold():
+        if not kernel_cache.kernels_cache_is_cold(law_kernels):
             return
         # (compile_law's own note says what and why, once)
         with kernel_cache.Ticker(sys.stderr, "aerial_drake: compiling"):
-            kernel_cache.compile_kernels()
-    if kernel_cache.kernels_cache_is_cold():
+            kernel_cache.compile_kernels(law_kernels)
+    if kernel_cache.kernels_cache_is_cold(law_kernels):
         return
     print("aerial_drake: compiled and cached; restarting the command to run with the cached "
           "code", file=sys.stderr, flush=True)
@@ -52,18 +53,19 @@ def compile_first(restartable: bool) -> None:
 
 
 @contextlib.contextmanager
-def cold_start(wait: bool, stream) -> Iterator[Callable[[], None]]:
+def cold_start(wait: bool, stream, law_kernels: tuple[str, ...] = ()
+               ) -> Iterator[Callable[[], None]]:
     """The block of a ``run SCENARIO``: on a cold cache (and not ``wait``), start the compile
     in the background, say so on ``stream``, and run the block on the reference
     implementation (:func:`aerial_drake.simulation.kernel_cache.reference_implementations`;
     ``metrics.json`` says ``control_law``); yields ``note()``, which says at the end whether
     the compile has finished. Warm, or ``wait``: nothing here (``wait``: the caller ran
-    :func:`compile_first`)."""
+    :func:`compile_first`). ``law_kernels``: as :func:`compile_first`'s."""
     from aerial_drake.simulation import kernel_cache
     if wait:
         yield lambda: None
         return
-    warm, note = kernel_cache.warm_or_started(stream)
+    warm, note = kernel_cache.warm_or_started(stream, law_kernels)
     if warm:
         yield note
         return

@@ -114,9 +114,12 @@ def cmd_run(args: argparse.Namespace) -> int:
     # A cold cache's run goes on at once on the reference law (cold_start, below), unless asked
     # to wait or long enough for the compile to cost less than the reference law would.
     wait = args.wait_compile or scenario.duration > COLD_REFERENCE_MAX_S
+    # The law kernel the scenario chooses (controller.kernel) is one of the run's kernels.
+    law_kernels = (scenario.controller.kernel,)
     if wait:
-        compile_first(args.restartable)  # after the scenario's checks, before Meshcat starts
-    with cold_start(wait, sys.stderr) as compile_note:
+        # after the scenario's checks, before Meshcat starts
+        compile_first(args.restartable, law_kernels)
+    with cold_start(wait, sys.stderr, law_kernels) as compile_note:
         status = _run_one(args, scenario)
     compile_note()
     return status

@@ -77,12 +77,17 @@ class _DecoupledControllerBase:
         period: the sampling period (s); 0 for continuous feedback.
         singularity: the damped inverse near the singularity of J_3 and when control is
             lost (:class:`aerial_drake.control.law.SingularityRobust`); the default is off.
+        kernel: the compiled law's kernel, ``"exact"`` (default: the paper runs' arithmetic,
+            bit for bit) or ``"fast"`` (the same law to round-off, faster;
+            :mod:`aerial_drake.control.compiled.fast_law`, docs/control.md "The fast
+            kernel"). The reference implementation (:meth:`solve`) is the same for both.
     """
 
     def _setup(self, plant: MultibodyPlant, end_effector_frame: Frame, task: TaskLayout,
                gains: Gains, *,
                sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT, f_d_limit: float = F_D_LIMIT,
-               period: float = 0.0, singularity: SingularityRobust = NO_DAMPING):
+               period: float = 0.0, singularity: SingularityRobust = NO_DAMPING,
+               kernel: str = "exact"):
         nv = plant.num_velocities()
         self._n = nv - 6
         if task.n != self._n:
@@ -101,6 +106,7 @@ class _DecoupledControllerBase:
         # The diagnostics' entry the damped law's check of control reads (evaluate_into).
         self._ee_error_at = diagnostics_slices(self._n)["ee_position_error"].start
         self._plant_context = plant.CreateDefaultContext()
+        self.kernel = kernel
         self.not_compiled_reason = ""
         self._compiled = self._make_compiled(gains) if self._dtype is float else None
 
@@ -121,7 +127,8 @@ class _DecoupledControllerBase:
         X_BE = self._frame.GetFixedPoseInBodyFrame()
         ee = (tree.index_of(self._frame.body()), X_BE.rotation().matrix(), X_BE.translation())
         return CompiledLaw(tree, self._plant.num_positions(), ee, self._task,
-                           pack_gains(self._K, self._gravity), **self._limits)
+                           pack_gains(self._K, self._gravity), **self._limits,
+                           kernel=self.kernel)
 
     @property
     def compiled(self) -> bool:
@@ -228,20 +235,20 @@ def DecoupledController_(T):
 
         def _construct(self, plant, end_effector_frame, task, gains, *,
                        sigma_min_J3_limit=SIGMA_MIN_J3_LIMIT, f_d_limit=F_D_LIMIT,
-                       period=0.0, singularity=NO_DAMPING, converter=None):
+                       period=0.0, singularity=NO_DAMPING, kernel="exact", converter=None):
             ControllerBase_[T].__init__(
                 self, plant, task, period=period,
                 diagnostics_layout=diagnostics_layout(plant.num_velocities() - 6),
                 converter=converter)
             self._setup(plant, end_effector_frame, task, gains,
                         sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit,
-                        singularity=singularity)
+                        singularity=singularity, kernel=kernel)
 
         def _construct_copy(self, other, converter=None):
             plant = other._plant.ToScalarType[T]()
             Impl._construct(self, plant, plant.get_frame(other._frame.index()), other._task,
                             other._gains, **other._limits, period=other.period,
-                            converter=converter)
+                            kernel=other.kernel, converter=converter)
 
     return Impl
 
@@ -271,13 +278,16 @@ class ZeroController(ControllerBase):
 
 def make_controller(model: AerialManipulator, gains: Gains, *,
                     sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT,
-                    f_d_limit: float = F_D_LIMIT, period: float = 0.0, zero: bool = False):
+                    f_d_limit: float = F_D_LIMIT, period: float = 0.0, zero: bool = False,
+                    kernel: str = "exact"):
     """The controller on ``model`` (from :mod:`aerial_drake.robots.models`) and its task,
-    sampled every ``period`` s (0: continuous); ``zero=True`` gives the
-    :class:`ZeroController` baseline instead."""
+    sampled every ``period`` s (0: continuous), its compiled law's ``kernel`` ("exact" or
+    "fast", :class:`DecoupledController`); ``zero=True`` gives the :class:`ZeroController`
+    baseline instead."""
     assert model.task is not None  # a finalized model
     if zero:
         return ZeroController(model.plant, model.task, period=period)
     return DecoupledController(
         model.plant, model.end_effector_frame, model.task, gains,
-        sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit, period=period)
+        sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit, period=period,
+        kernel=kernel)

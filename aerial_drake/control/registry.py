@@ -30,6 +30,9 @@ ControllerFactory = Callable[[Any, AerialManipulator], object]
 
 #: ``controller.type`` of the paper's controller (Section III), the default.
 PAPER_CONTROLLER = "paper"
+#: ``controller.kernel``: the paper law's compiled kernels (``paper`` and ``paper_plus``),
+#: ``exact`` the default (:data:`aerial_drake.control.compiled.law.LAW_KERNEL_NAMES`).
+LAW_KERNEL_CHOICES = ("exact", "fast")
 #: Where a baseline's attitude inertia comes from, as its gain-design warning says.
 LOCKED_SOURCE = "(the robot locked at its start, principal moments)"
 
@@ -40,7 +43,8 @@ LOCKED_SOURCE = "(the robot locked at its start, principal moments)"
 def _paper(scenario: Any, model: AerialManipulator):
     from aerial_drake.control.controller import make_controller
     return make_controller(model, scenario.gains, sigma_min_J3_limit=scenario.sigma_min_J3_limit,
-                           f_d_limit=scenario.f_d_limit, period=scenario.controller_period)
+                           f_d_limit=scenario.f_d_limit, period=scenario.controller_period,
+                           kernel=scenario.controller.kernel)
 
 
 def _paper_plus(scenario: Any, model: AerialManipulator):

@@ -58,20 +58,22 @@ COLD_REASON = ("numba's cache is cold (first run after installing); the compiled
                "in the background after this run")
 
 
-def compile_kernels() -> None:
+def compile_kernels(law_kernels: tuple[str, ...] = ()) -> None:
     """Compile, or load from numba's cache, every numba kernel a run calls from Python: the
-    control law and the reference's. From their argument types alone, so before any model
-    is built; the command line calls this on the first run after installing and then
-    restarts itself (``aerial_drake.cli.restart``)."""
-    compile_law()
+    control law and the reference's, and the law kernels named in ``law_kernels`` (a
+    scenario's ``controller.kernel``, e.g. ``("fast",)``: compiled only for a run that chooses
+    it). From their argument types alone, so before any model is built; the command line
+    calls this on the first run after installing and then restarts itself
+    (``aerial_drake.cli.restart``)."""
+    compile_law(law_kernels)
     compile_reference()
 
 
-def kernels_cache_is_cold() -> bool:
-    """Whether any kernel :func:`compile_kernels` compiles would compile rather than load
-    (:func:`aerial_drake.control.compiled.is_cached`)."""
-    return law_cache_is_cold() or not all(is_cached(kernel, signature)
-                                          for kernel, signature in REFERENCE_KERNELS)
+def kernels_cache_is_cold(law_kernels: tuple[str, ...] = ()) -> bool:
+    """Whether any kernel :func:`compile_kernels` compiles (with ``law_kernels``) would compile
+    rather than load (:func:`aerial_drake.control.compiled.is_cached`)."""
+    return law_cache_is_cold(law_kernels) or not all(
+        is_cached(kernel, signature) for kernel, signature in REFERENCE_KERNELS)
 
 
 def _cache_tag() -> str:
@@ -207,7 +209,7 @@ print(time.strftime("%Y-%m-%d %H:%M:%S"), "process", os.getpid(), "waits for the
 sys.stdin.read()
 sys.path.insert(0, {root!r})
 from aerial_drake.simulation.kernel_cache import background_compile
-background_compile()
+background_compile({law_kernels!r})
 """
 
 #: The background compiles this process started (kept so that Python does not warn about a
@@ -215,13 +217,14 @@ background_compile()
 _STARTED: list[subprocess.Popen] = []
 
 
-def start_background_compile() -> int | None:
+def start_background_compile(law_kernels: tuple[str, ...] = ()) -> int | None:
     """Start the compile in a process of its own (:data:`_BACKGROUND`), detached from the
     terminal's signals (its own process group: a Ctrl-C in the terminal does not stop it;
     it ignores SIGHUP): it compiles once this process calls
     :func:`release_background_compile` or ends, at the lowest priority, and then exits (30 s
     to a minute); its output is appended to :func:`log_path`. Returns its
-    process id, or None where a compile is already under way.
+    process id, or None where a compile is already under way. ``law_kernels``: as
+    :func:`compile_kernels`'s.
 
     Not a session of its own: Linux's scheduler gives each session (autogroup) an equal
     share of the CPU whatever its processes' nice values, so a compile in a session of its
@@ -230,7 +233,8 @@ def start_background_compile() -> int | None:
     if compile_is_under_way():
         return None
     program = _BACKGROUND.format(lock=str(lock_path()), parent=os.getpid(),
-                                 root=str(Path(__file__).resolve().parents[2]))
+                                 root=str(Path(__file__).resolve().parents[2]),
+                                 law_kernels=tuple(law_kernels))
     group = ({"process_group": 0} if sys.version_info >= (3, 11)
              else {"preexec_fn": os.setpgrp})
     with open(log_path(), "ab") as log:
@@ -249,18 +253,18 @@ def release_background_compile() -> None:
             child.stdin.close()
 
 
-def background_compile() -> None:
+def background_compile(law_kernels: tuple[str, ...] = ()) -> None:
     """The background compile's work, its lock held (:data:`_BACKGROUND`): compile if the
     cache is still cold (another process may have compiled it meanwhile)."""
-    if not kernels_cache_is_cold():
+    if not kernels_cache_is_cold(law_kernels):
         print(f"process {os.getpid()}: the cache is warm already", flush=True)
         return
     print(f"{time.strftime('%Y-%m-%d %H:%M:%S')} process {os.getpid()}: compiling the "
           "kernels", flush=True)
     start = time.perf_counter()
-    compile_kernels()
+    compile_kernels(law_kernels)
     print(f"process {os.getpid()}: done in {time.perf_counter() - start:.1f} s; cache "
-          f"{'still cold' if kernels_cache_is_cold() else 'warm'}", flush=True)
+          f"{'still cold' if kernels_cache_is_cold(law_kernels) else 'warm'}", flush=True)
 
 
 def compile_in_child(stream: TextIO | None = None) -> None:
@@ -292,14 +296,16 @@ def reference_implementations(reason: str) -> Iterator[None]:
         use_interpreted_reference(False)
 
 
-def warm_or_started(stream: TextIO | None) -> tuple[bool, Callable[[], None]]:
+def warm_or_started(stream: TextIO | None, law_kernels: tuple[str, ...] = ()
+                    ) -> tuple[bool, Callable[[], None]]:
     """For a run that need not wait (module docstring): ``(True, nothing)`` when the cache is
     warm; else start the background compile (or find one under way), say so on ``stream``,
     and return ``(False, note)``, ``note()`` saying at the end of the run whether the compile
-    has finished."""
-    if not kernels_cache_is_cold():
+    has finished. ``law_kernels``: the run's law kernels beyond the default
+    (:func:`compile_kernels`)."""
+    if not kernels_cache_is_cold(law_kernels):
         return True, lambda: None
-    pid = start_background_compile()
+    pid = start_background_compile(law_kernels)
     if stream is not None:
         when = (f"when this run ends (process {pid})" if pid is not None
                 else "by a compile already under way")
@@ -315,7 +321,7 @@ def warm_or_started(stream: TextIO | None) -> tuple[bool, Callable[[], None]]:
         if pid is not None:
             state = ("starts now (30 s to a minute, at the lowest priority); runs started "
                      "before it has finished use the reference implementation too")
-        elif kernels_cache_is_cold() or compile_is_under_way():
+        elif kernels_cache_is_cold(law_kernels) or compile_is_under_way():
             state = "still under way"
         else:
             state = "done: later runs use the compiled law"

@@ -24,8 +24,9 @@ The entries, :func:`tracking_layout` (name, size) pairs, World frame:
 
 With the paper's controller these equal its diagnostics of the same names to the bit (the
 same compiled kernels in the same order, :class:`~aerial_drake.control.compiled.CompiledTracking`)
-at the same state; with sensing noise or delay they differ, as intended: these are the true
-errors, at the simulated plant's state, the diagnostics the controller's view.
+at the same state (to round-off with ``controller.kernel: fast``, whose arithmetic
+differs); with sensing noise or delay they differ, as intended: these are the true errors,
+at the simulated plant's state, the diagnostics the controller's view.
 
 :class:`Tracking` computes them for a batch of samples (the runner's, once per run after the
 simulation); :class:`TrackingErrors` is the same as a Drake system (output port

@@ -228,8 +228,8 @@ def test_the_background_compile_is_let_go_when_the_run_ends(monkeypatch):
     waiting = subprocess.Popen([sys.executable, "-c", "import sys; sys.stdin.read()"],
                                stdin=subprocess.PIPE)
     monkeypatch.setattr(kernel_cache, "_STARTED", [waiting])
-    monkeypatch.setattr(kernel_cache, "kernels_cache_is_cold", lambda: True)
-    monkeypatch.setattr(kernel_cache, "start_background_compile", lambda: waiting.pid)
+    monkeypatch.setattr(kernel_cache, "kernels_cache_is_cold", lambda *kernels: True)
+    monkeypatch.setattr(kernel_cache, "start_background_compile", lambda *kernels: waiting.pid)
     from aerial_drake.cli.restart import cold_start
     with cold_start(False, io.StringIO()) as note:
         assert reference_law_reason() == kernel_cache.COLD_REASON
@@ -274,3 +274,28 @@ def test_the_background_compile_warms_the_cache_for_the_next_run(tmp_path):
     warm_log = dict(np.load(out / "nominal" / "log.npz"))
     np.testing.assert_allclose(cold_log["plant_state"], warm_log["plant_state"], rtol=1e-9,
                                atol=1e-9)
+
+
+def test_the_cold_check_counts_the_law_kernel_a_run_chooses(monkeypatch):
+    """controller.kernel: fast makes the fast law one of the run's kernels: cold while it is
+    not cached, whatever the default kernels' state; the default check does not look at it."""
+    from aerial_drake.control.compiled import law
+    kernel_cache.compile_kernels()  # this process's cache: loaded (the suite runs warm)
+    monkeypatch.setattr(law, "is_cached", lambda kernel, signature: kernel is not law._law_fast)
+    assert not kernel_cache.kernels_cache_is_cold()
+    assert not kernel_cache.kernels_cache_is_cold(("exact",))
+    assert kernel_cache.kernels_cache_is_cold(("fast",))
+
+
+def test_run_passes_the_scenario_kernel_to_the_cold_start(monkeypatch, tmp_path):
+    from aerial_drake.cli import main
+    seen = []
+
+    def warm_or_started(stream, law_kernels=()):
+        seen.append(law_kernels)
+        return True, lambda: None
+
+    monkeypatch.setattr(kernel_cache, "warm_or_started", warm_or_started)
+    assert main(["run", "nominal", "--duration", "0.05", "--no-plots", "--quiet", "--out",
+                 str(tmp_path), "--set", "controller.kernel=fast"]) == 0
+    assert seen == [("fast",)]

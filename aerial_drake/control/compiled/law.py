@@ -10,6 +10,7 @@ import sys
 import numpy as np
 from numba import types
 
+from aerial_drake.control.compiled.fast_law import _law_fast
 from aerial_drake.control.compiled.kernels import (
     GAIN_LAYOUT,
     LIMITS_SIZE,
@@ -62,10 +63,12 @@ def pack_gains(K, gravity: float) -> np.ndarray:
     return np.concatenate(parts)
 
 
-def law_cache_is_cold() -> bool:
+def law_cache_is_cold(kernels: tuple[str, ...] = ()) -> bool:
     """Whether numba's cache lacks a kernel :func:`compile_law` compiles (the first use after
-    installing, or after a change to the kernels' source): :func:`is_cached` of each."""
-    return not all(is_cached(kernel, signature) for kernel, signature in LAW_KERNELS)
+    installing, or after a change to the kernels' source): :func:`is_cached` of each; with
+    ``kernels``, also those law kernels (:data:`LAW_KERNEL_NAMES`, e.g. ``("fast",)``)."""
+    return not all(is_cached(kernel, signature)
+                   for kernel, signature in _law_kernels(kernels))
 
 
 def is_cached(kernel, signature: tuple) -> bool:
@@ -87,9 +90,9 @@ def is_cached(kernel, signature: tuple) -> bool:
         return True
 
 
-def _note_if_cold() -> None:
+def _note_if_cold(kernels: tuple[str, ...] = ()) -> None:
     """Say on stderr that the law is about to compile, if numba's cache is cold."""
-    if law_cache_is_cold():
+    if law_cache_is_cold(kernels):
         print("aerial_drake: compiling the control law with numba (first use after "
               "installing; about a minute, cached afterwards) ...", file=sys.stderr,
               flush=True)
@@ -105,14 +108,26 @@ _TRACKING_SIGNATURE = (_F64_2D,) * 5 + (_F64, types.Array(types.int64, 1, "C"), 
 #: them (the law first: it is most of the time).
 LAW_KERNELS = ((_law, _LAW_SIGNATURE), (_tracking, _TRACKING_SIGNATURE),
                (_workspace_size, (types.int64, types.int64, types.boolean)))
+#: The law's kernels by the name of the scenario's ``controller.kernel``: ``exact`` (the
+#: default, the paper runs') and ``fast`` (:mod:`.fast_law`: the same law to round-off,
+#: compiled only where chosen: the first controller built on it compiles it).
+LAW_KERNEL_NAMES = {"exact": _law, "fast": _law_fast}
 
 
-def compile_law() -> None:
+def _law_kernels(kernels: tuple[str, ...]) -> tuple:
+    """:data:`LAW_KERNELS` and the law kernels named in ``kernels`` beyond them."""
+    extra = tuple((LAW_KERNEL_NAMES[name], _LAW_SIGNATURE) for name in kernels
+                  if LAW_KERNEL_NAMES[name] is not _law)
+    return LAW_KERNELS + extra
+
+
+def compile_law(kernels: tuple[str, ...] = ()) -> None:
     """Compile the law (and the workspace's size) into numba's cache, or load them from it,
     without a model: their argument types are the same for every tree
-    (``simulation.runner.compile_kernels``; a test holds these signatures to what a run calls)."""
-    _note_if_cold()
-    for kernel, signature in LAW_KERNELS:
+    (``simulation.runner.compile_kernels``; a test holds these signatures to what a run calls);
+    with ``kernels``, also those law kernels (:data:`LAW_KERNEL_NAMES`)."""
+    _note_if_cold(kernels)
+    for kernel, signature in _law_kernels(kernels):
         kernel.compile(signature)
 
 
@@ -174,12 +189,19 @@ class CompiledLaw:
         singularity: the damped inverse near the singularity of J_3 (damping 0: off, the
             paper's law; with it on, no Assumption 1 status: the caller checks that control
             is kept, :meth:`SingularityRobust.check_control_kept`).
+        kernel: ``"exact"`` (the paper runs' arithmetic, bit for bit) or ``"fast"`` (the same
+            law to round-off, faster: :mod:`.fast_law`); see :data:`LAW_KERNEL_NAMES`.
     """
 
     def __init__(self, tree: KinematicTree, num_positions: int,
                  end_effector: tuple[int, np.ndarray, np.ndarray], task: TaskLayout,
                  gains: np.ndarray, sigma_min_J3_limit: float,
-                 f_d_limit: float, singularity: SingularityRobust = NO_DAMPING):
+                 f_d_limit: float, singularity: SingularityRobust = NO_DAMPING,
+                 kernel: str = "exact"):
+        if kernel not in LAW_KERNEL_NAMES:
+            raise ValueError(f"kernel '{kernel}' is not one of {tuple(LAW_KERNEL_NAMES)}")
+        self.kernel = kernel
+        self._kernel = LAW_KERNEL_NAMES[kernel]
         nb, nv = tree.parent.size, tree.reflected_inertia.size
         gains = np.ravel(gains).astype(float)
         # The kernel's own count run as Python (py_func): nothing compiles outside compile_law.
@@ -196,9 +218,9 @@ class CompiledLaw:
     def _compile(self) -> None:
         """Compile (or load from numba's cache) now, at construction, rather than in the
         middle of the first simulation step: one evaluation at rest, outputs discarded."""
-        if _law.signatures:
+        if self._kernel.signatures:
             return
-        _note_if_cold()
+        _note_if_cold((self.kernel,))
         x = np.zeros(self._nq + self._nv)
         x[0] = 1.0  # unit quaternion, all else zero
         com, task = np.zeros(COM_REFERENCE_SIZE), np.zeros(task_reference_size(self._n_joints))
@@ -210,8 +232,8 @@ class CompiledLaw:
 
     def __call__(self, x: np.ndarray, com: np.ndarray, task: np.ndarray, heading: np.ndarray,
                  command: np.ndarray, diagnostics: np.ndarray) -> tuple[int, float, float]:
-        return _law(x, com, task, heading, command, diagnostics, self._model, self._index,
-                    self._work)
+        return self._kernel(x, com, task, heading, command, diagnostics, self._model,
+                            self._index, self._work)
 
 
 class CompiledTracking:

@@ -72,12 +72,14 @@ class PaperPlusController(ControllerBase):
             command_limits`); infinite: no saturation.
         sigma_min_J3_limit, f_d_limit: the paper law's assumption checks.
         period: the sampling period (s), > 0.
+        kernel: the paper law's compiled kernel, "exact" or "fast"
+            (:class:`~aerial_drake.control.controller.DecoupledController`).
     """
 
     def __init__(self, model: AerialManipulator, gains: Gains, params: PlusParams,
                  limits: tuple[np.ndarray, np.ndarray], *,
                  sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT, f_d_limit: float = F_D_LIMIT,
-                 period: float = 1e-3):
+                 period: float = 1e-3, kernel: str = "exact"):
         task = model.task
         assert task is not None  # a finalized model
         if not period > 0:
@@ -92,7 +94,7 @@ class PaperPlusController(ControllerBase):
         self._law = DecoupledController(
             model.plant, model.end_effector_frame, task, gains,
             sigma_min_J3_limit=sigma_min_J3_limit, f_d_limit=f_d_limit, period=period,
-            singularity=self._singularity)
+            singularity=self._singularity, kernel=kernel)
         self._force_port = self.DeclareVectorInputPort("vehicle_force_estimate", 3)
         plant = model.plant
         self._tau_port = self.DeclareVectorInputPort("generalized_force_estimate",
@@ -265,4 +267,4 @@ def make_paper_plus(scenario, model: AerialManipulator,
     return PaperPlusController(
         model, scenario.gains, scenario.controller.plus, limits,
         sigma_min_J3_limit=scenario.sigma_min_J3_limit, f_d_limit=scenario.f_d_limit,
-        period=scenario.controller_period)
+        period=scenario.controller_period, kernel=scenario.controller.kernel)

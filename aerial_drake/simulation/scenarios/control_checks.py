@@ -6,8 +6,14 @@ from __future__ import annotations
 from typing import Any
 
 from aerial_drake.control.plus.params import PAPER_PLUS
-from aerial_drake.control.registry import controller_types
-from aerial_drake.simulation.scenarios.checks import BANDWIDTH, ScenarioError, flag, number
+from aerial_drake.control.registry import LAW_KERNEL_CHOICES, PAPER_CONTROLLER, controller_types
+from aerial_drake.simulation.scenarios.checks import (
+    BANDWIDTH,
+    ScenarioError,
+    flag,
+    number,
+    show,
+)
 
 
 def check_controller(s: Any, n: int, mass: float) -> None:
@@ -23,6 +29,7 @@ def check_controller(s: Any, n: int, mass: float) -> None:
         raise ScenarioError(f"controller.type: {PAPER_PLUS} needs controller_period > 0 (its "
                             "integrators are discrete state at that period); set "
                             "controller_period, e.g. 0.001", "controller_period")
+    _check_kernel(controller.kernel, controller.type)
     try:
         controller.baseline.validate()
         controller.plus.validate(n)
@@ -54,6 +61,21 @@ def check_controller(s: Any, n: int, mass: float) -> None:
                 f"controller.plus.{name}: true needs an estimate of {what}, which the wrench "
                 "observer provides, but observer.enabled is false: set observer.enabled: true, "
                 f"or {name}: false", f"controller.plus.{name}")
+
+
+def _check_kernel(kernel: Any, controller_type: str) -> None:
+    """``controller.kernel``: one of LAW_KERNEL_CHOICES, and other than the default only for the
+    controllers built on the compiled law (elsewhere it would be ignored, silently)."""
+    if not isinstance(kernel, str) or kernel not in LAW_KERNEL_CHOICES:
+        raise ScenarioError(
+            f"controller.kernel: {show(kernel)} is not one of {', '.join(LAW_KERNEL_CHOICES)} "
+            "(exact: the paper runs' arithmetic, bit for bit; fast: the same law to "
+            "round-off, faster): write e.g. controller.kernel: exact", "controller.kernel")
+    if kernel != LAW_KERNEL_CHOICES[0] and controller_type not in (PAPER_CONTROLLER, PAPER_PLUS):
+        raise ScenarioError(
+            f"controller.kernel: {kernel} chooses the compiled law of {PAPER_CONTROLLER} and "
+            f"{PAPER_PLUS}, which controller.type {controller_type} does not run: remove "
+            f"controller.kernel (or set it to {LAW_KERNEL_CHOICES[0]})", "controller.kernel")
 
 
 def check_observer(observer: Any, period: float) -> None:

@@ -20,7 +20,7 @@ from aerial_drake.control.baselines.params import BaselineParams
 from aerial_drake.control.gains import Gains
 from aerial_drake.control.law import F_D_LIMIT, SIGMA_MIN_J3_LIMIT
 from aerial_drake.control.plus.params import PlusParams
-from aerial_drake.control.registry import PAPER_CONTROLLER
+from aerial_drake.control.registry import LAW_KERNEL_CHOICES, PAPER_CONTROLLER
 from aerial_drake.robots.description import DEFAULT_ROBOT, RobotDescription
 from aerial_drake.robots.models import AerialManipulator, make_plant
 from aerial_drake.simulation.scenarios.checks import (
@@ -116,6 +116,10 @@ class ControllerConfig:
     baseline: BaselineParams = field(default_factory=BaselineParams)
     # paper_plus's options (used by "paper_plus"; the defaults are all off).
     plus: PlusParams = field(default_factory=PlusParams)
+    # The compiled law's kernel (used by "paper" and "paper_plus"; docs/control.md, "The fast
+    # kernel"): "exact" (the paper runs' arithmetic, bit for bit) or "fast" (the same law to
+    # round-off, about a tenth faster; compiled the first time it is chosen).
+    kernel: str = LAW_KERNEL_CHOICES[0]
 
 
 @dataclass
