@@ -5,12 +5,13 @@ written (docs/robots.md, "robot init"). The steps, each in its module:
 2. the task (:func:`task_candidates`): the pose for a 6-joint arm; otherwise the position
    (and the orientation from 6 joints up) with joint components for the rest, the joints
    chosen where the posture search finds the largest margin;
-3. :mod:`.limits`: thrust from the stated thrust-to-weight ratio, body torques, efforts;
+3. :mod:`~aerial_drake.analysis.onboarding.limits`: thrust from the thrust-to-weight
+   ratio, body torques, efforts;
 4. :mod:`.posture`: the nominal posture (Assumption 1 and joint-limit margins, the tool
    pointing where asked);
 5. at that posture: the system's CoM, the end effector's offset r_o of (33), the locked
    inertia (every body rigidly locked, about the CoM);
-6. :mod:`.gains`: Table II scaled by the documented rule;
+6. :mod:`~aerial_drake.analysis.onboarding.gains`: Table II scaled by the documented rule;
 7. :mod:`.writer`: the three files; :mod:`.workspace`: the workspace radius from the end
    effector's reach (``robot check``'s); then the scenarios loaded back and validated as a
    run would (so what was written runs).

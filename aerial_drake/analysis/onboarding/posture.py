@@ -11,7 +11,8 @@ its limit, and how fast the task loop can be made there.
   at its best);
 - ``joint margin``: the smallest of ``2 min(q - lower, upper - q) / (upper - lower)`` over
   the joints (1 at mid-range, 0 at a limit; a joint without limits counts 1);
-- ``p_task``: the slowest pole of ``-Lambda_z^-1 K_z`` with :mod:`.gains`' K_z rule at ``q``,
+- ``p_task``: the slowest pole of ``-Lambda_z^-1 K_z`` with the K_z rule of
+  :mod:`~aerial_drake.analysis.onboarding.gains` at ``q``,
   over ``p_CoM`` = :data:`TASK_SPEED_TARGET`, Table II's slowest CoM root. Where the task's
   inertia is ill conditioned (a light wrist whose orientation moves heavy links) the K_z the
   sampling allows leaves a task root far slower than the vehicle's: 0.65 1/s at a hexacopter
