@@ -292,6 +292,7 @@ def _finish(options, found, name, task, tried, key, posture, limits, robot, mani
                                 quaternion.z()]))
     hover_yaml = hover_text(hover)
     pick_path = scenario_path.with_name(f"{name}_pick_and_place.yaml")
+    robot_path.parent.mkdir(parents=True, exist_ok=True)  # --out may name a new folder
     write_text_atomically(robot_path, robot_text(robot_file))
     write_text_atomically(scenario_path, hover_yaml)
     write_text_atomically(pick_path, pick_and_place_text(hover, hover_yaml))

@@ -2,6 +2,7 @@
 6-joint arm and a welded tool0; tests/own_robot.py: a quadrotor with a 4-joint arm): what it
 finds, chooses and writes, its errors, and the hover scenario it writes flying as written."""
 
+import json
 import warnings
 
 import numpy as np
@@ -207,5 +208,10 @@ def test_the_command_line_writes_refuses_to_overwrite_and_exits_2(tmp_path, caps
     assert "exists: give --force" in capsys.readouterr().err
     assert main(["robot", "init", str(model), "--quiet", "--force", "--name", "other"]) == 0
     assert (tmp_path / "other.robot.yaml").is_file()
+    assert main(["robot", "init", str(model), "--quiet", "--out", str(tmp_path / "new" / "dir"),
+                 "--json"]) == 0  # a folder that does not exist yet
+    assert (tmp_path / "new" / "dir" / "quad_arm_hover.yaml").is_file()
+    out = capsys.readouterr().out
+    assert json.loads(out[out.index("{"):])["task"] == ["position", "joint:j4"]
     assert main(["robot", "init", str(tmp_path / "missing.urdf")]) == 2
     assert "no such file" in capsys.readouterr().err
