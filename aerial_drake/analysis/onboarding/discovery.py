@@ -215,7 +215,12 @@ def discover(model: Path, vehicle: str | None = None, end_effector: str | None =
         frames = [plant.get_frame(i) for m in range(plant.num_model_instances())
                   for i in plant.GetFrameIndices(ModelInstanceIndex(m))]
         if not is_body and not any(f.name() == end_effector for f in frames):
-            names = sorted({f.name() for f in frames if not f.name().startswith("__")})
+            joint_frames = {f.name() for j in _all_joints(plant)
+                            for f in (j.frame_on_parent(), j.frame_on_child())}
+            bodies = {b.name() for b in _bodies(plant)}
+            names = sorted({f.name() for f in frames if not f.name().startswith("__")
+                            and (f.name() in bodies or f.name() not in joint_frames)
+                            and f.name() != "world"})
             raise OnboardingError(f"--end-effector {end_effector}: no such frame or body; "
                                   f"frames: {', '.join(names)}", "--end-effector")
         frame_body = (_find_body(plant, name, "--end-effector") if is_body else next(

@@ -43,6 +43,10 @@ def test_discovery_finds_the_vehicle_the_chain_and_the_tool_frame(tmp_path):
     # the weld's own joint frames are not.
     assert found.end_effector == "tool0" and found.end_effector_is_body
     assert set(found.candidates) == {"tool0", "wrist_3"}
+    # A wrong name lists the model's frames, not the joints' own frames.
+    with pytest.raises(OnboardingError, match="frames: forearm, hexacopter, pan, tool0,") as err:
+        discover(tmp_path / "hexarm.urdf", end_effector="nope")
+    assert "_parent" not in str(err.value) and "world" not in str(err.value)
 
 
 def test_init_writes_a_description_and_a_hover_scenario_that_load(hexarm):
