@@ -20,7 +20,7 @@ from aerial_drake.simulation.runner import reference_configuration
 from aerial_drake.simulation.scenarios import load_scenario
 from aerial_drake.trajectories.kinds import evaluate_reference
 from chain_plant import make_random_chain
-from states import at_state, random_states, rel
+from states import at_state, random_states, rel, symmetric_cases
 
 N_TASK = 7  # the paper's task: end-effector pose and q3
 DIAGNOSTICS_SIZE = diagnostics_size(N_TASK)
@@ -179,20 +179,8 @@ def test_min_eigenvalue_matches_numpy():
     method: as accurate as LAPACK's (a few rounding units of the norm) on symmetric matrices
     with a spread, a double or a zero smallest eigenvalue, and on indefinite ones; nan when
     the matrix is not finite."""
-    rng = np.random.default_rng(7)
     work = np.empty((4, 7))
-    for k in range(400):
-        J = rng.normal(size=(7, 7))
-        U, _, Vt = np.linalg.svd(J)
-        s = np.sort(rng.uniform(0.1, 3.0, 7))
-        if k % 4 == 1:
-            s[0] = 10.0 ** rng.uniform(-8, 0)
-        elif k % 4 == 2:
-            s[1] = s[0]
-        elif k % 4 == 3:
-            s[0] = 0.0
-        S = (U * s) @ Vt
-        S = S.T @ S if k % 8 < 4 else 0.5 * (J + J.T)  # half positive semi-definite
+    for k, S in symmetric_cases():
         expected = np.linalg.eigvalsh(S)[0]
         got = _min_eigenvalue_sym(S.copy(), work)
         assert abs(got - expected) <= 1e-14 * np.linalg.norm(S, 2), k

@@ -30,7 +30,7 @@ from aerial_drake.simulation.diagram import build_closed_loop
 from aerial_drake.simulation.runner import run_scenario
 from aerial_drake.simulation.scenarios import ScenarioError, load_scenario
 from own_robot import write_robot
-from states import random_states, rel
+from states import random_states, rel, symmetric_cases
 
 #: The agreement asked of the fast kernel: round-off of the reordered sums and solves
 #: (measured about 1e-14 to 1e-13), far below any effect on a run.
@@ -162,20 +162,8 @@ def test_laguerre_min_eigenvalue_matches_numpy():
     """The fast kernel's smallest eigenvalue (Laguerre's iteration) on the exact kernel's test
     cases (tests/control/test_compiled.py): a spread, a tiny, a double or a zero smallest
     eigenvalue, indefinite matrices; a few rounding units of the norm; nan when not finite."""
-    rng = np.random.default_rng(7)
     work = np.empty((4, 7))
-    for k in range(400):
-        J = rng.normal(size=(7, 7))
-        U, _, Vt = np.linalg.svd(J)
-        s = np.sort(rng.uniform(0.1, 3.0, 7))
-        if k % 4 == 1:
-            s[0] = 10.0 ** rng.uniform(-8, 0)
-        elif k % 4 == 2:
-            s[1] = s[0]
-        elif k % 4 == 3:
-            s[0] = 0.0
-        S = (U * s) @ Vt
-        S = S.T @ S if k % 8 < 4 else 0.5 * (J + J.T)  # half positive semi-definite
+    for k, S in symmetric_cases():
         expected = np.linalg.eigvalsh(S)[0]
         got = _min_eigenvalue_laguerre(S.copy(), work)
         assert abs(got - expected) <= 1e-14 * np.linalg.norm(S, 2), k

@@ -26,6 +26,7 @@ robot from its description (one source for every number).
 
 from __future__ import annotations
 
+import functools
 import warnings
 from dataclasses import dataclass
 
@@ -69,6 +70,7 @@ def _kind(row: int) -> str:
     return "position" if row < 3 else "orientation" if row < POSE_ROWS else "joint"
 
 
+@functools.cache  # a scenario load and a plant: once per process, not per posture search
 def table_ii() -> tuple[Gains, dict[str, tuple[float, float]], float]:
     """Table II's gains, its ``(K_y, K_z)`` per row kind, and the paper robot's mass."""
     from aerial_drake.control.gain_design import GainDesignWarning

@@ -32,7 +32,12 @@ import numpy as np
 from aerial_drake.analysis.onboarding.discovery import Discovery, discover
 from aerial_drake.analysis.onboarding.errors import OnboardingError
 from aerial_drake.analysis.onboarding.gains import ScaledGains, scaled_gains
-from aerial_drake.analysis.onboarding.limits import InputLimits, input_limits
+from aerial_drake.analysis.onboarding.limits import (
+    ROLL_PITCH_SHARE,
+    YAW_SHARE,
+    InputLimits,
+    input_limits,
+)
 from aerial_drake.analysis.onboarding.posture import Posture, arm_length, choose_posture
 from aerial_drake.analysis.onboarding.workspace import REACH_SHARE, reach_radius
 from aerial_drake.analysis.onboarding.writer import (
@@ -257,10 +262,10 @@ def _finish(options, found, name, task, tried, key, posture, limits, robot, mani
     workspace = float(f"{WORKSPACE_SHARE * length:.3g}")
     gains = scaled_gains(manip, q, CONTROLLER_PERIOD)
     mass = manip.total_mass()
-    rule = (f"{limits.body_torque_source == 'rule' and 'the rule of docs/robots.md' or 'given'}"
-            f": {0.25:g} x T_max x R (R = {limits.vehicle_radius:.3g} m, from the vehicle's "
-            f"{limits.radius_source}) in roll and pitch, a tenth of it in yaw"
-            if limits.body_torque_source == "rule" else "given (--body-torque)")
+    rule = (f"the rule of docs/robots.md: {ROLL_PITCH_SHARE:g} x T_max x R (R = "
+            f"{limits.vehicle_radius:.3g} m, from the vehicle's {limits.radius_source}) in roll "
+            f"and pitch, {YAW_SHARE:g} of it in yaw" if limits.body_torque_source == "rule"
+            else "given (--body-torque)")
     robot_file = RobotFile(
         name=name, model=model_entry, vehicle_body=found.vehicle_body,
         arm_joints=found.arm_joints, end_effector=found.end_effector,
