@@ -27,6 +27,7 @@ from aerial_drake.analysis.onboarding.loaded_rest import RestLoop, RestState
 from aerial_drake.analysis.onboarding.margins import Margin, direction_margins
 from aerial_drake.analysis.onboarding.reach import Reach, reach
 from aerial_drake.control.gain_design import LoopRoots, gain_design_message, loop_roots
+from aerial_drake.simulation.outputs import finite_or_none
 
 #: sigma_min(J_3) at the posture within this factor of the limit is tight.
 SIGMA_TIGHT_FACTOR = 1.5
@@ -66,7 +67,7 @@ class RobotCheck:
     def to_json(self) -> dict:
         """Strict JSON (no NaN or infinity)."""
         s, model = self.subject, self.subject.model
-        return _finite({
+        return finite_or_none({
             "file": str(s.file), "scenario": s.scenario_source,
             "robot": model.description.name, "mass_kg": s.mass, "weight_N": s.weight,
             "task": list(model.task.components) if model.task else [],
@@ -85,17 +86,6 @@ class RobotCheck:
                        "value": [r["value"].real, r["value"].imag]} for r in self.roots],
             "attitude_separation": self.loop_roots.separation,
             "warnings": list(self.warnings)})
-
-
-def _finite(value):
-    """``value`` with every non-finite float as None (strict JSON)."""
-    if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_finite(v) for v in value]
-    if isinstance(value, (float, np.floating)):
-        return float(value) if np.isfinite(value) else None
-    return value
 
 
 def com_compliance(subject: CheckSubject) -> np.ndarray:

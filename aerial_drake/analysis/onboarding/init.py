@@ -52,7 +52,7 @@ from aerial_drake.analysis.onboarding.writer import (
 from aerial_drake.control.baselines.tuning import locked_inertia
 from aerial_drake.robots.description import EndEffector, Limits, RobotDescription
 from aerial_drake.robots.models import make_plant
-from aerial_drake.simulation.outputs import write_text_atomically
+from aerial_drake.simulation.outputs import finite_or_none, write_text_atomically
 
 #: The most task candidates tried (joint components chosen among the arm's joints).
 MAX_TASK_CANDIDATES = 12
@@ -105,7 +105,7 @@ class InitResult:
     def to_json(self) -> dict:
         """Strict JSON (finite numbers only)."""
         g = self.gains.gains
-        return {
+        return finite_or_none({
             "robot": str(self.robot_path), "scenario": str(self.scenario_path),
             "pick_and_place": str(self.pick_and_place_path),
             "vehicle_body": self.discovery.vehicle_body,
@@ -129,7 +129,7 @@ class InitResult:
                       "Lambda2_bar": g.Lambda2_bar, "K_y": g.K_y, "K_z": g.K_z},
             "task_poles": sorted(float(p.real) for p in self.gains.task_poles),
             "notes": self.notes,
-        }
+        })
 
 
 def _unit(text: str, option: str, table: dict) -> np.ndarray | None:
