@@ -20,6 +20,7 @@ from typing import Any, Callable
 import numpy as np
 
 from aerial_drake.control.baselines.params import BASELINE_TYPES
+from aerial_drake.control.force.params import PAPER_FORCE
 from aerial_drake.control.plus.params import PAPER_PLUS
 from aerial_drake.robots.models import AerialManipulator
 from aerial_drake.trajectories.base import ReferenceSource
@@ -30,8 +31,9 @@ ControllerFactory = Callable[[Any, AerialManipulator], object]
 
 #: ``controller.type`` of the paper's controller (Section III), the default.
 PAPER_CONTROLLER = "paper"
-#: ``controller.kernel``: the paper law's compiled kernels (``paper`` and ``paper_plus``),
-#: ``exact`` the default (:data:`aerial_drake.control.compiled.law.LAW_KERNEL_NAMES`).
+#: ``controller.kernel``: the paper law's compiled kernels (``paper``, ``paper_plus``,
+#: ``paper_force``), ``exact`` the default
+#: (:data:`aerial_drake.control.compiled.law.LAW_KERNEL_NAMES`).
 LAW_KERNEL_CHOICES = ("exact", "fast")
 #: Where a baseline's attitude inertia comes from, as its gain-design warning says.
 LOCKED_SOURCE = "(the robot locked at its start, principal moments)"
@@ -51,6 +53,12 @@ def _paper_plus(scenario: Any, model: AerialManipulator):
     from aerial_drake.control.limits import command_limits
     from aerial_drake.control.plus.controller import make_paper_plus
     return make_paper_plus(scenario, model, command_limits(scenario.actuation, model))
+
+
+def _paper_force(scenario: Any, model: AerialManipulator):
+    from aerial_drake.control.force.controller import make_paper_force
+    from aerial_drake.control.limits import command_limits
+    return make_paper_force(scenario, model, command_limits(scenario.actuation, model))
 
 
 def zero_controller(scenario: Any, model: AerialManipulator):
@@ -88,7 +96,8 @@ def _baseline(kind: str) -> ControllerFactory:
     return factory
 
 
-_REGISTRY: dict[str, ControllerFactory] = {PAPER_CONTROLLER: _paper, PAPER_PLUS: _paper_plus}
+_REGISTRY: dict[str, ControllerFactory] = {PAPER_CONTROLLER: _paper, PAPER_PLUS: _paper_plus,
+                                           PAPER_FORCE: _paper_force}
 _REGISTRY.update({kind: _baseline(kind) for kind in BASELINE_TYPES})
 _BUILT_IN = tuple(_REGISTRY)
 

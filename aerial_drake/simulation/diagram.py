@@ -19,7 +19,8 @@ Ports of the closed loop (the Diagram's exported ports, or :meth:`ClosedLoop.inp
   visualisers), ``rotor_drive_torque`` (rotors variant only), the wrench observer's
   ``external_wrench_estimate``, ``generalized_force_estimate`` and ``external_force_estimate``
   (``observer.enabled`` only; the last also feeds the controller's ``vehicle_force_estimate``
-  input if it has one, paper_plus's).
+  input if it has one, paper_plus's), ``contact_wrench`` and ``measured_contact_force``
+  (:mod:`aerial_drake.simulation.contact`; with an environment).
 """
 
 from __future__ import annotations
@@ -54,6 +55,7 @@ from aerial_drake.simulation.actuators import (
     lag_time_constant,
     make_base_actuator,
 )
+from aerial_drake.simulation.contact import add_contact_sensing
 from aerial_drake.simulation.disturbances import (
     add_wrench_source,
     bound_end_effector_windows,
@@ -190,16 +192,13 @@ def _add_command_path(
 
     Returns the base (4) and joint (n) command ports that drive the actuation, the applied
     command port (``[f, mu, tau]`` after lag and saturation) and the lag (None without).
-    Each system here is evaluated at every integrator stage and adds framework work to every
-    step, so there are few: one lag system that passes the joint torques through, one
-    saturation on the whole vector.
+    Each system here adds framework work to every integrator stage, so there are few: one lag
+    system that passes the joint torques through, one saturation on the whole vector.
     """
     n = len(model.arm_joints)
     lag = None
     if scenario.actuation.lag_rise_time > 0:
-        # One C++ system for the lag on [f, mu] and the joint torques passed through: fewer
-        # systems to evaluate at each integrator stage than a split, a filter and a join.
-        lag = builder.AddSystem(ActuatorLag(
+        lag = builder.AddSystem(ActuatorLag(  # [f, mu] lagged, the joint torques passed
             lag_time_constant(scenario.actuation.lag_rise_time), 4, n))
         lag.set_name("actuator_lag")
         builder.Connect(command, lag.get_input_port())
@@ -333,6 +332,7 @@ def add_closed_loop(builder: DiagramBuilder, scenario: Scenario, *,
     outputs["plant_state"] = state_out
     assert sim.scene_graph is not None  # add_to_builder registers the plant with one
     outputs["query_object"] = sim.scene_graph.get_query_output_port()
+    outputs.update(add_contact_sensing(builder, scenario, sim, controller))  # docs/contact.md
     return ClosedLoop(diagram=None, simulated_plant=sim, controller_model=model,
                       controller=controller, reference=reference, lag=lag, n_arm=n,
                       inputs=inputs, outputs=outputs, sensor=sensor)
@@ -344,8 +344,7 @@ def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: 
     returns the drive's torque output.
 
     A Drake ``AffineSystem`` on the plant's state, ``y = D x + y0`` with ``D = -gain`` at the
-    rotors' velocities and ``y0 = gain speed``: no state of its own (a damping-only
-    ``PidController`` would carry two unused integrator states through every step).
+    rotors' velocities and ``y0 = gain speed``: no state of its own (unlike a PidController).
     """
     plant = sim.plant
     nq = plant.num_positions()
@@ -368,7 +367,8 @@ def _add_rotor_drive(builder: DiagramBuilder, sim: AerialManipulator, scenario: 
 #: compiled code (the run's ``ReferenceGenerator.source``, equal to the last bit), so nothing
 #: evaluates them in the loop but the controller.
 LOGGED_PORTS = ("plant_state", "command", "applied_command", "diagnostics", "rotor_drive_torque",
-                "external_wrench_estimate", "generalized_force_estimate")
+                "external_wrench_estimate", "generalized_force_estimate", "contact_wrench",
+                "measured_contact_force")
 
 
 def build_simulation(scenario: Scenario, *, builder: DiagramBuilder | None = None,

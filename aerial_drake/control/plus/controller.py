@@ -74,12 +74,14 @@ class PaperPlusController(ControllerBase):
         period: the sampling period (s), > 0.
         kernel: the paper law's compiled kernel, "exact" or "fast"
             (:class:`~aerial_drake.control.controller.DecoupledController`).
+        extra_diagnostics: (name, size) pairs after paper_plus's, a subclass's own.
     """
 
     def __init__(self, model: AerialManipulator, gains: Gains, params: PlusParams,
                  limits: tuple[np.ndarray, np.ndarray], *,
                  sigma_min_J3_limit: float = SIGMA_MIN_J3_LIMIT, f_d_limit: float = F_D_LIMIT,
-                 period: float = 1e-3, kernel: str = "exact"):
+                 period: float = 1e-3, kernel: str = "exact",
+                 extra_diagnostics: tuple[tuple[str, int], ...] = ()):
         task = model.task
         assert task is not None  # a finalized model
         if not period > 0:
@@ -89,7 +91,7 @@ class PaperPlusController(ControllerBase):
         n = task.n
         params.validate(n)
         super().__init__(model.plant, task, period=period,
-                         diagnostics_layout=plus_diagnostics_layout(n))
+                         diagnostics_layout=plus_diagnostics_layout(n) + extra_diagnostics)
         self._singularity = params.singularity()
         self._law = DecoupledController(
             model.plant, model.end_effector_frame, task, gains,

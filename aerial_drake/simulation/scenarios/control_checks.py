@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from aerial_drake.control.force.params import PAPER_FORCE
 from aerial_drake.control.plus.params import PAPER_PLUS
 from aerial_drake.control.registry import LAW_KERNEL_CHOICES, PAPER_CONTROLLER, controller_types
 from aerial_drake.simulation.scenarios.checks import (
@@ -22,27 +23,31 @@ def check_controller(s: Any, n: int, mass: float) -> None:
     source in a run)."""
     controller, period = s.controller, s.controller_period
     types = controller_types()
+    # paper_force is paper_plus with a force task: every paper_plus rule holds for it.
+    plus_like = controller.type in (PAPER_PLUS, PAPER_FORCE)
     if controller.type not in types:
         raise ScenarioError(f"controller.type: '{controller.type}' is not one of {types}",
                             "controller.type")
-    if controller.type == PAPER_PLUS and period == 0:
-        raise ScenarioError(f"controller.type: {PAPER_PLUS} needs controller_period > 0 (its "
+    if plus_like and period == 0:
+        raise ScenarioError(f"controller.type: {controller.type} needs controller_period > 0 (its "
                             "integrators are discrete state at that period); set "
                             "controller_period, e.g. 0.001", "controller_period")
     _check_kernel(controller.kernel, controller.type)
     try:
         controller.baseline.validate()
         controller.plus.validate(n)
+        if controller.type == PAPER_FORCE:
+            controller.force.validate()
     except ValueError as err:
         # Each section's message starts with the field's dotted name.
         raise ScenarioError(str(err), str(err).split(" ", 1)[0]) from None
-    if controller.type == PAPER_PLUS and any(controller.plus.com_gain()):
+    if plus_like and any(controller.plus.com_gain()):
         # The bound needs the robot's total mass (the robot's facts, read once per robot).
         unstable = controller.plus.com_gain_error(mass, s.gains.K_x, s.gains.D_x)
         if unstable:
             raise ScenarioError(unstable, "controller.plus.com_integral_gain")
     plus = controller.plus
-    if (controller.type == PAPER_PLUS and plus.singularity_damping > 0
+    if (plus_like and plus.singularity_damping > 0
             and not plus.singularity_threshold > s.sigma_min_J3_limit):
         # With damping on the Assumption 1 stop is off: an eps at or below its limit would
         # run the exact inverse through a near-singular J_3 with nothing to stop it.
@@ -55,7 +60,7 @@ def check_controller(s: Any, n: int, mass: float) -> None:
     # silently.
     for name, what in (("vehicle_force_feedforward", "the force on the vehicle"),
                        ("wrench_compensation", "the external generalized force")):
-        if (controller.type == PAPER_PLUS and getattr(controller.plus, name)
+        if (plus_like and getattr(controller.plus, name)
                 and not s.observer.enabled):
             raise ScenarioError(
                 f"controller.plus.{name}: true needs an estimate of {what}, which the wrench "
@@ -71,11 +76,13 @@ def _check_kernel(kernel: Any, controller_type: str) -> None:
             f"controller.kernel: {show(kernel)} is not one of {', '.join(LAW_KERNEL_CHOICES)} "
             "(exact: the paper runs' arithmetic, bit for bit; fast: the same law to "
             "round-off, faster): write e.g. controller.kernel: exact", "controller.kernel")
-    if kernel != LAW_KERNEL_CHOICES[0] and controller_type not in (PAPER_CONTROLLER, PAPER_PLUS):
+    if kernel != LAW_KERNEL_CHOICES[0] and controller_type not in (PAPER_CONTROLLER, PAPER_PLUS,
+                                                                  PAPER_FORCE):
         raise ScenarioError(
-            f"controller.kernel: {kernel} chooses the compiled law of {PAPER_CONTROLLER} and "
-            f"{PAPER_PLUS}, which controller.type {controller_type} does not run: remove "
-            f"controller.kernel (or set it to {LAW_KERNEL_CHOICES[0]})", "controller.kernel")
+            f"controller.kernel: {kernel} chooses the compiled law of {PAPER_CONTROLLER}, "
+            f"{PAPER_PLUS} and {PAPER_FORCE}, which controller.type {controller_type} does not "
+            f"run: remove controller.kernel (or set it to {LAW_KERNEL_CHOICES[0]})",
+            "controller.kernel")
 
 
 def check_observer(observer: Any, period: float) -> None:

@@ -17,6 +17,7 @@ from pydrake.multibody.plant import MultibodyPlantConfig
 from pydrake.systems.analysis import SimulatorConfig
 
 from aerial_drake.control.baselines.params import BaselineParams
+from aerial_drake.control.force.params import ForceTaskParams
 from aerial_drake.control.gains import Gains
 from aerial_drake.control.law import F_D_LIMIT, SIGMA_MIN_J3_LIMIT
 from aerial_drake.control.plus.params import PlusParams
@@ -36,7 +37,7 @@ from aerial_drake.simulation.scenarios.perturbations import (
     Wind,
 )
 from aerial_drake.simulation.scenarios.robot import robot_description
-from aerial_drake.simulation.scenarios.world import Environment, continuous_plant
+from aerial_drake.simulation.scenarios.world import Environment, ForceSensor, continuous_plant
 from aerial_drake.trajectories.params import TrajectoryParams
 
 __all__ = ["Scenario", "Disturbance", "InitialCondition", "Actuation", "Rotors",
@@ -109,13 +110,16 @@ class ControllerConfig:
     """Which controller closes the loop (docs/baselines.md); all use the scenario's gains."""
 
     # "paper" (Section III), "paper_plus" (the paper's law with integral action and the
-    # vehicle-force feed-forward, docs/control.md), "uncoupled", "static_compensation", or a
+    # vehicle-force feed-forward, docs/control.md), "paper_force" (paper_plus with a force
+    # task, docs/contact.md), "uncoupled", "static_compensation", or a
     # name registered with aerial_drake.control.registry.register_controller.
     type: str = PAPER_CONTROLLER
     # The baselines' own parameters (used by "uncoupled" and "static_compensation").
     baseline: BaselineParams = field(default_factory=BaselineParams)
-    # paper_plus's options (used by "paper_plus"; the defaults are all off).
+    # paper_plus's options (used by "paper_plus" and "paper_force"; the defaults are all off).
     plus: PlusParams = field(default_factory=PlusParams)
+    # The force task (used by "paper_force"; docs/contact.md).
+    force: ForceTaskParams = field(default_factory=ForceTaskParams)
     # The compiled law's kernel (used by "paper" and "paper_plus"; docs/control.md, "The fast
     # kernel"): "exact" (the paper runs' arithmetic, bit for bit) or "fast" (the same law to
     # round-off, about a tenth faster; compiled the first time it is chosen).
@@ -201,6 +205,8 @@ class Scenario:
     # continuous, time_step 0) and the environment's model directives (default: none).
     plant: MultibodyPlantConfig = field(default_factory=continuous_plant)
     environment: Environment = field(default_factory=Environment)
+    # The wrist force sensor of paper_force's force task (docs/contact.md).
+    force_sensor: ForceSensor = field(default_factory=ForceSensor)
     # What the arm's joint limits do: stop the run (default), enforce, or report only.
     joint_limits: JointLimits = field(default_factory=JointLimits)
 

@@ -65,6 +65,21 @@ class Environment:
         return ModelDirectives(directives=list(self.directives)) if self.directives else None
 
 
+@dataclass
+class ForceSensor:
+    """The wrist force sensor the force task reads (``paper_force``;
+    :class:`aerial_drake.simulation.contact.ForceSensor`): the true contact force on the end
+    effector through a first-order low-pass, plus Gaussian noise per sample, at the
+    controller's period."""
+
+    # The low-pass's cut-off (Hz); .inf: none. A 6-axis wrist sensor's output filter is
+    # typically set between 100 Hz and 1 kHz (ATI Nano/Mini series: 0-1 kHz selectable).
+    bandwidth: float = 200.0
+    # Noise standard deviation per axis and sample (N); ATI Mini45's resolution is 1/16 N.
+    noise_std: float = 0.05
+    seed: int = 0
+
+
 def find_bad_world_field(data: dict) -> str | None:
     """The dotted name of the first value of a scenario file's ``plant`` or
     ``environment.directives`` that does not fit its type, with what was expected (Drake's
