@@ -11,8 +11,10 @@ import json
 import numpy as np
 from pydrake.systems.framework import Context
 
+from aerial_drake.control.force.params import PAPER_FORCE
 from aerial_drake.control.law import AssumptionViolation, diagnostics_layout
 from aerial_drake.control.wrench_observer import observer_layouts
+from aerial_drake.simulation.contact_metrics import contact_metrics
 from aerial_drake.simulation.diagram import ClosedLoop, input_limits
 from aerial_drake.simulation.failure_cause import arm_stretch, classify_failure, singular_stop
 from aerial_drake.simulation.joint_limits import ArmLimits, limit_metrics
@@ -160,6 +162,14 @@ def run_metrics(scenario: Scenario, loop: ClosedLoop, log: dict[str, np.ndarray]
         metrics["rotors"] = rotor_metrics(
             log["plant_state"][:, nq + sim.rotor_velocity_indices], log["rotor_drive_torque"],
             scenario.rotors.speed * np.array(sim.rotor_directions))
+    if "contact_wrench" in log:  # an environment: what touched it (docs/contact.md)
+        force_task = (scenario.controller.force if scenario.controller.type == PAPER_FORCE
+                      else None)
+        task = loop.controller_model.task
+        assert task is not None  # a finalized model
+        metrics["contact"] = contact_metrics(
+            log["t"], log["contact_wrench"], named, task.rows,
+            force_task, scenario.log_period)
     metrics["failure_cause"] = failure_cause(scenario, loop, log, named, failure)
     if getattr(loop.controller, "compiled", True) is False:  # absent: the compiled law ran
         metrics["control_law"] = ("reference implementation (numpy): "

@@ -66,8 +66,11 @@ class PaperForceController(PaperPlusController):
         pressing = pressing_force(measured, self._direction)
         accel = admittance_acceleration(t, adm, pressing, self._force)
         task = shifted_task(task, self._direction, adm, accel)
-        if self._force.feedforward:  # the contact force is an external force on the robot
-            force = force + measured
+        if self._force.feedforward:
+            # The surface's push back along the direction, the force the task commands; the
+            # friction across it answers the motion task's own push (feeding the whole
+            # measured force gave the same force and path errors, UR3e wall press).
+            force = force - pressing * self._direction
         super()._run(t, x, com, task, heading, state, force, tau_hat, command, diagnostics)
         d = self._slices
         diagnostics[d["force_desired"]] = desired_force(t, self._force)
