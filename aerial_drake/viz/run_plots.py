@@ -1,8 +1,9 @@
 """Figures for the daily loop: one run's own Figs. 3-6, and any runs overlaid.
 
 - :func:`write_run_figures`: what ``aerial-drake run SCENARIO`` writes into the run's folder
-  after the simulation (``--no-plots`` skips it): Figs. 3-6 of that run alone, and its arm
-  joints against their limits (:func:`figure_joint_limits`), as PNG.
+  after the simulation (``--no-plots`` skips it): Figs. 3-6 of that run alone, its arm
+  joints against their limits (:func:`figure_joint_limits`), and with an environment its
+  contact (:mod:`aerial_drake.viz.contact_plots`), as PNG.
 - :func:`write_overlay`: ``aerial-drake plot RUN_DIR [RUN_DIR ...]``: Figs. 3-5 with every
   run overlaid, each labelled by its run name (the scenario's name; the folder is added when
   two runs share a name) and each distinct reference drawn dashed with its own legend entry;
@@ -21,6 +22,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from aerial_drake.simulation.joint_limits import scenario_arm_limits
+from aerial_drake.viz.contact_plots import CONTACT_FIGURE, figure_contact
 from aerial_drake.viz.plots import (
     DPI,
     FIGURE_NAMES,
@@ -52,6 +54,8 @@ def write_run_figures(run_dir: str | Path, formats: tuple[str, ...] = RUN_FORMAT
     figures = dict(zip(FIGURE_NAMES, (figure_end_effector(runs), figure_com(runs),
                                       figure_orientation_errors(runs), figure_inputs(run))))
     figures[JOINT_LIMITS_FIGURE] = figure_joint_limits(run)
+    if "contact_wrench" in run.log:  # an environment (docs/contact.md)
+        figures[CONTACT_FIGURE] = figure_contact(run)
     return [p for name, fig in figures.items() for p in save_figure(fig, folder, name, formats)]
 
 
