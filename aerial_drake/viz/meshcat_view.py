@@ -29,6 +29,10 @@ What :class:`TrackingOverlay` draws, under ``/drake/overlays`` (``OVERLAY_PATHS`
   application, ``FORCE_SCALE`` m per N: green on the helicopter frame origin, orange on the
   end-effector point (the paper's green and orange windows). Torques are not drawn.
 
+With an environment (the closed loop's ``contact_wrench`` output), Drake's
+``ContactVisualizer`` also draws the contact forces, under ``/drake/contact_forces``
+(:mod:`aerial_drake.viz.contact_view`).
+
 Every pose and visibility is sent with ``time_in_recording`` = the simulation time, so the
 overlays animate in ``replay.html`` as the robot does.
 
@@ -58,6 +62,7 @@ from pydrake.geometry import (
     Sphere,
 )
 from pydrake.math import RigidTransform, RotationMatrix
+from pydrake.multibody.meshcat import ContactVisualizer
 from pydrake.systems.framework import Context, DiagramBuilder, EventStatus, LeafSystem
 
 from aerial_drake.control.law import desired_attitude, desired_force
@@ -75,6 +80,7 @@ from aerial_drake.trajectories.reference import (
     unpack_task_reference,
 )
 from aerial_drake.viz.camera import camera_for
+from aerial_drake.viz.contact_view import add_contact_visualizer
 
 #: Seconds between frames (live and recorded), for the robot and the overlays.
 PUBLISH_PERIOD = 0.02
@@ -324,14 +330,15 @@ class MeshcatView:
         self.publish_period = publish_period
         self.visualizer: MeshcatVisualizer | None = None
         self.overlay: TrackingOverlay | None = None
+        self.contact_visualizer: ContactVisualizer | None = None  # with an environment
 
     @property
     def url(self) -> str:
         return self.meshcat.web_url()
 
     def configure(self, builder: DiagramBuilder, loop: ClosedLoop) -> None:
-        """Add the visualizer and the overlay to ``builder`` (before Build), frame the camera
-        and start recording."""
+        """Add the visualizer, the overlay and (with an environment) the contact visualizer
+        to ``builder`` (before Build), frame the camera and start recording."""
         params = MeshcatVisualizerParams()
         params.role = Role.kIllustration
         params.publish_period = self.publish_period
@@ -354,6 +361,8 @@ class MeshcatView:
             system, index = sources[(wrench_input.get_system(), wrench_input.get_index())]
             builder.Connect(system.get_output_port(index), overlay.GetInputPort(port))
         self.overlay = overlay
+        self.contact_visualizer = add_contact_visualizer(builder, loop, self.meshcat,
+                                                         self.publish_period)
         self.meshcat.SetCameraPose(*camera_for(self.scenario, reference))
         self.meshcat.StartRecording(1.0 / self.publish_period,
                                     set_visualizations_while_recording=self.live)

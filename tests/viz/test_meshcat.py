@@ -132,6 +132,7 @@ def test_replay_animates_robot_and_overlays(watched):
                  "base_attitude_desired", "force_vehicle", "force_end_effector"):
         assert f"{dut.OVERLAY_PREFIX}/{name}".encode() in animation, name
     assert b"visible" in animation  # the arrows come and go with their windows
+    assert b"/drake/contact_forces" not in b"".join(blobs)  # no environment, no contact arrows
     # The static lines are objects of the scene (animations carry no objects).
     scene = b"".join(b for b in blobs if b"set_object" in b)
     assert f"{dut.OVERLAY_PREFIX}/ee_path".encode() in scene
