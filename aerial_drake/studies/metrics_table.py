@@ -23,6 +23,15 @@ DEFAULT_METRICS = ("simulated_time_s", "min_sigma_min_J3", "min_f_d_norm_N",
                    "window*.*_peak_m", "saturated_after.*")
 
 
+#: metrics.json's ``contact`` entries a study's table can keep (``contact.NAME``;
+#: aerial_drake.simulation.contact_metrics): the force task's and any run's touch.
+CONTACT_SCALARS = ("contact_time_s", "first_contact_s", "contact_transitions_run",
+                   "peak_contact_force_N", "peak_pressing_force_N", "force_mean_N",
+                   "force_error_max_rel", "force_error_rms_rel", "contact_lost_s",
+                   "contact_transitions", "tangential_error_max_m", "tangential_error_rms_m",
+                   "slip_m", "friction_ratio_max")
+
+
 def _number(value: Any) -> float | None:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return None
@@ -41,6 +50,9 @@ def flatten_metrics(metrics: dict) -> dict[str, float | None]:
     for w, window in enumerate(metrics.get("disturbance_response", [])):
         for name in WINDOW_PEAKS:
             flat[f"window{w}.{name}"] = _number(window.get(name))
+    for name, value in (metrics.get("contact") or {}).items():  # an environment's run
+        if name in CONTACT_SCALARS:
+            flat[f"contact.{name}"] = _number(value)
     late: dict = next((v for k, v in metrics.items() if k.startswith("saturated_s_after")), {})
     for name, value in late.items():
         flat[f"saturated_after.{name}"] = _number(value)
@@ -59,4 +71,6 @@ def metric_names(scenario: Scenario) -> list[str]:
                                  for _ in scenario.disturbances],
         "saturated_s_after_": {name: 0.0 for name in input_names(robot_facts(scenario).n)},
     } | {name: 0.0 for name in RUN_SCALARS}
+    if scenario.environment.directives:
+        template["contact"] = {name: 0.0 for name in CONTACT_SCALARS}
     return list(flatten_metrics(template))
