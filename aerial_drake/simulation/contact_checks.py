@@ -9,7 +9,8 @@ admittance shift):
 1. :func:`check_reach`: the tool touches a surface of the environment within
    ``controller.force.max_shift`` along ``controller.force.direction`` (the most the force
    task moves the reference), by sphere tracing on SceneGraph's signed distances
-   (:mod:`aerial_drake.simulation.contact_geometry`);
+   (:mod:`aerial_drake.simulation.contact_geometry`), and the reference does not put it
+   deeper into a surface than that either;
 2. :func:`check_stiffness`: on the continuous plant integrated at a fixed step h by an
    explicit scheme, the contact's natural frequency omega = sqrt(k / m_eff) within
    omega h <= :data:`MAX_OMEGA_STEP`; k the tool's and the surface's point contact
@@ -160,6 +161,8 @@ def check_reach(scenario: Scenario, surfaces: Surfaces, samples: list[ContactSam
                 best = (tool, hit)
         assert best is not None
         sample.tool, sample.hit = best
+        if best[1].depth > force.max_shift + 1e-9:
+            raise ScenarioError(_depth_message(sample, force), "controller.force.max_shift")
         if best[1].distance <= force.max_shift + 1e-9:
             continue
         if surfaces.unmeasured and not best[1].found:
@@ -192,6 +195,19 @@ def _reach_message(scenario: Scenario, sample: ContactSample, force: ForceTaskPa
             f"[{force.start:g}, {force.stop:g}] s, the tool '{tool.name}' (radius "
             f"{tool.radius:g} m) at its reference position {_show(centre)} m presses along "
             f"{_show(direction)}, but {found}: it would press on nothing. Fix: {fix}")
+
+
+def _depth_message(sample: ContactSample, force: ForceTaskParams) -> str:
+    tool, hit = sample.tool, sample.hit
+    assert tool is not None and hit is not None
+    return (f"controller.force.max_shift: at t = {sample.t:.3f} s, in the force window "
+            f"[{force.start:g}, {force.stop:g}] s, the end-effector reference puts the tool "
+            f"'{tool.name}' {hit.depth:.3f} m deep into '{hit.name}', more than max_shift = "
+            f"{force.max_shift:g} m, the most the force task backs the reference out: the "
+            "motion control would press the rest of the way with its own stiffness, whatever "
+            f"controller.force.force asks. Fix: end the end-effector reference (the "
+            f"waypoints) at or before the surface, or raise max_shift to at least "
+            f"{hit.depth:.3f} m")
 
 
 def check_stiffness(scenario: Scenario, model: AerialManipulator, surfaces: Surfaces,

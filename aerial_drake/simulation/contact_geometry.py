@@ -69,12 +69,14 @@ class Tool:
 class Hit:
     """The first surface a sphere meets along a direction: ``distance`` it travels first (m;
     0 if it already touches; inf if none within the search distance), the surface's
-    geometry, name and point contact stiffness (N/m)."""
+    geometry, name and point contact stiffness (N/m), and ``depth``, how far the sphere
+    already reaches into it where it starts (m; 0 if it does not)."""
 
     distance: float
     geometry: GeometryId | None = None
     name: str = ""
     stiffness: float = math.nan
+    depth: float = 0.0
 
     @property
     def found(self) -> bool:
@@ -173,7 +175,8 @@ class Surfaces:
             gap = phi - radius
             if gap <= TOUCH:
                 return Hit(s, geometry, self.inspector.GetName(geometry),
-                           point_stiffness(self.inspector, geometry, self.default_stiffness))
+                           point_stiffness(self.inspector, geometry, self.default_stiffness),
+                           depth=max(-gap, 0.0) if s == 0.0 else 0.0)
             s += gap
             if s > horizon:
                 break

@@ -320,3 +320,12 @@ def test_largest_thrust_force_pressing_down_meets_the_thrust_minimum():
     assert (bound, binds) == (pytest.approx(400.0), "maximum")
     assert largest_thrust_force(a, np.array([1.0, 0.0, 0.0]), 0.0, math.inf) == \
         (math.inf, "")
+
+
+def test_a_reference_deep_in_the_surface_is_refused(tmp_path):
+    """The reference puts the tool's sphere 0.09 m into the wall (centre at x = 1.05 m,
+    radius 0.04 m, face at 1.0 m), more than max_shift backs out."""
+    scenario = load_scenario(write_scenario(tmp_path, ee_x=1.05))
+    err = refusal(scenario)
+    assert err.field == "controller.force.max_shift"
+    assert "0.090 m deep into 'wall" in str(err)
