@@ -181,8 +181,10 @@ def _reach_message(scenario: Scenario, sample: ContactSample, force: ForceTaskPa
                  f"ahead of the tool, {hit.distance - force.max_shift:.3f} m more than "
                  f"controller.force.max_shift = {force.max_shift:g} m, the most the force "
                  "task moves the reference")
-        fix = (f"bring the end-effector reference (the waypoints) {hit.distance:.3f} m "
-               "closer to the surface along the direction over the window, or move the "
+        fix = (f"bring the end-effector reference (the waypoints) at least "
+               f"{hit.distance - force.max_shift:.3f} m closer to the surface along the "
+               f"direction over the window ({hit.distance:.3f} m to touch it without the "
+               "force task's shift), or move the "
                "window (controller.force.start, stop) to when the reference is there, or "
                "move the environment's surface")
     else:
@@ -290,4 +292,5 @@ def apparent_mass(model: AerialManipulator, q: np.ndarray, p_WC: np.ndarray,
 
 
 def _show(v: np.ndarray) -> str:
-    return "[" + ", ".join(f"{x:.3g}" for x in np.asarray(v, float)) + "]"
+    """A vector to 4 decimals, round-off (3e-29) and -0 shown as 0."""
+    return "[" + ", ".join(f"{x:g}" for x in np.round(np.asarray(v, float), 4) + 0.0) + "]"
