@@ -102,9 +102,13 @@ def check_contact(scenario: Scenario, loop) -> None:
 def window_samples(scenario: Scenario, model: AerialManipulator, force: ForceTaskParams,
                    reference: ReferenceSource) -> list[ContactSample]:
     """The reference postures along ``force``'s window (its start, its stop and every
-    :data:`SAMPLE_SPACING` s between), each solved from the last."""
-    steps = max(1, int(math.ceil((force.stop - force.start) / SAMPLE_SPACING - 1e-9)))
-    times = np.linspace(force.start, min(force.stop, scenario.duration), steps + 1)
+    :data:`SAMPLE_SPACING` s between, at most :data:`SAMPLE_SPACING` apart; none if the
+    window starts after the run's end), each solved from the last."""
+    stop = min(force.stop, scenario.duration)  # (a window past the run's end is cut there)
+    if stop <= force.start:
+        return []
+    steps = max(1, int(math.ceil((stop - force.start) / SAMPLE_SPACING - 1e-9)))
+    times = np.linspace(force.start, stop, steps + 1)
     plant = model.plant
     context = plant.CreateDefaultContext()
     mass_gravity = mass_and_gravity(model)

@@ -329,3 +329,14 @@ def test_a_reference_deep_in_the_surface_is_refused(tmp_path):
     err = refusal(scenario)
     assert err.field == "controller.force.max_shift"
     assert "0.090 m deep into 'wall" in str(err)
+
+
+def test_largest_in_box_stops_at_the_first_bound_either_side():
+    from aerial_drake.simulation.contact_loads import largest_in_box
+    v0, a = np.array([1.0, -2.0, 0.0]), np.array([1.0, -0.5, 0.0])
+    lower, upper = np.array([-5.0, -4.0, -1.0]), np.array([4.0, 3.0, 1.0])
+    assert largest_in_box(v0, a, lower, upper) == (pytest.approx(3.0), 0)  # 1 + 3 = 4
+    assert largest_in_box(v0, np.array([0.1, -0.5, 0.0]), lower, upper) == \
+        (pytest.approx(4.0), 1)  # -2 - 4 (0.5) = -4
+    assert largest_in_box(np.array([5.0, 0.0, 0.0]), a, lower, upper) == (0.0, 0)
+    assert largest_in_box(v0, np.zeros(3), lower, upper) == (math.inf, -1)
