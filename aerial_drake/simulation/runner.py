@@ -20,6 +20,7 @@ from aerial_drake.control.compiled import reference_law_reason
 from aerial_drake.control.law import AssumptionViolation
 from aerial_drake.control.reference_pose import reference_configuration
 from aerial_drake.control.registry import ControllerFactory
+from aerial_drake.simulation.contact_checks import check_contact
 from aerial_drake.simulation.diagram import ClosedLoop, build_simulation
 from aerial_drake.simulation.disturbances import resolve_random_disturbances
 from aerial_drake.simulation.feasibility import check_reference, check_start_posture
@@ -267,6 +268,7 @@ def _run_locked(scenario: Scenario, lock: FolderLock | None, progress: bool,
     if lock is not None:
         _note_replaced_results(scenario, lock.folder, stream)
     check_reference(scenario, loop.controller_model, loop.reference.source)
+    check_contact(scenario, loop)  # a force task's surface, contact step, loads
     if getattr(loop.controller, "compiled", True) is False and reference_law_reason() is None:
         # (Where the process chose the reference law, its caller says so: kernel_cache.)
         # Said once: every valid description is compiled today (quaternion base, revolute

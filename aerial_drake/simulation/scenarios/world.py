@@ -18,6 +18,7 @@ from pydrake.multibody.parsing import ModelDirective, ModelDirectives
 from pydrake.multibody.plant import MultibodyPlant, MultibodyPlantConfig
 
 from aerial_drake import drake_compat
+from aerial_drake.control.force.params import PAPER_FORCE
 from aerial_drake.robots.description import RobotDescription, RobotDescriptionError
 from aerial_drake.robots.environment import WorldError, environment_parser
 from aerial_drake.robots.models import add_aerial_manipulator
@@ -200,3 +201,12 @@ def check_world(scenario: Any) -> None:
     check_plant(scenario.plant, scenario.controller_period)
     check_environment(scenario.environment, scenario.robot_description(),
                       scenario.plant_variant)
+    if scenario.controller.type == PAPER_FORCE and not scenario.environment.directives:
+        # The rest of the force task's surface, its contact and its loads need the built
+        # model: simulation.contact_checks, before the run.
+        raise ScenarioError(
+            f"environment: controller.type {PAPER_FORCE} presses the tool on a surface "
+            "along controller.force.direction, but the scenario has no environment: add the "
+            "surface as environment.directives (e.g. add_model "
+            "package://aerial_drake/environments/wall.sdf and add_weld it to world; "
+            "docs/world.md), or choose another controller.type", "environment")
