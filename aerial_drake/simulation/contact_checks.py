@@ -18,7 +18,9 @@ admittance shift):
    apparent mass of the robot at the contact point along d;
 3. :func:`check_force` (:mod:`aerial_drake.simulation.contact_loads`): the thrust
    |m (x_d'' + g e3) + F d|, the body torques and the arm's joint torques that hold the
-   pressing force F within the command limits.
+   pressing force F within the command limits;
+4. :func:`check_rates` (:mod:`aerial_drake.simulation.contact_rates`): the force loop's
+   gain per sample, and friction's regularised damping on an explicit fixed step.
 """
 
 from __future__ import annotations
@@ -41,6 +43,12 @@ from aerial_drake.dynamics.equilibrium import (
 from aerial_drake.robots.models import AerialManipulator
 from aerial_drake.simulation.contact_geometry import Hit, Surfaces, Tool
 from aerial_drake.simulation.contact_loads import check_force
+from aerial_drake.simulation.contact_rates import (
+    check_force_loop,
+    check_friction,
+    pair_friction,
+    tangential_mass,
+)
 from aerial_drake.simulation.scenarios import Scenario, ScenarioError
 from aerial_drake.trajectories.base import ReferenceSource
 
@@ -97,6 +105,30 @@ def check_contact(scenario: Scenario, loop) -> None:
     check_reach(scenario, surfaces, samples, force, direction)
     check_stiffness(scenario, loop.controller_model, surfaces, samples, direction)
     check_force(scenario, loop.controller_model, samples, force, direction)
+    check_rates(scenario, loop.controller_model, surfaces, samples, force, direction)
+
+
+def check_rates(scenario: Scenario, model: AerialManipulator, surfaces: Surfaces,
+                samples: list[ContactSample], force: ForceTaskParams,
+                direction: np.ndarray) -> None:
+    """:mod:`aerial_drake.simulation.contact_rates`' checks at the first sample that touches
+    a surface: the force loop's gain, and friction's damping on an explicit fixed step."""
+    touching = [s for s in samples if s.tool is not None and s.hit is not None
+                and s.hit.found]
+    if not touching:
+        return
+    sample = touching[0]
+    tool, hit = sample.tool, sample.hit
+    assert tool is not None and hit is not None
+    pair = f"'{tool.name}' on '{hit.name}'"
+    check_force_loop(scenario, force, series_stiffness(tool.stiffness, hit.stiffness), pair)
+    simulator = scenario.simulator
+    if (scenario.plant.time_step == 0 and not simulator.use_error_control
+            and simulator.integration_scheme in EXPLICIT_SCHEMES):
+        mu = pair_friction(surfaces.inspector, tool.geometry, hit.geometry)
+        m_t = tangential_mass(model, sample.q, sample.contact_point(direction), direction,
+                              apparent_mass)
+        check_friction(scenario, force, mu, m_t, longest_step(scenario), pair)
 
 
 def window_samples(scenario: Scenario, model: AerialManipulator, force: ForceTaskParams,

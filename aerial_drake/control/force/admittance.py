@@ -4,10 +4,12 @@ direction. No Drake here."""
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from aerial_drake.control.force.params import ForceTaskParams
-from aerial_drake.trajectories.reference import unpack_task_reference
+from aerial_drake.trajectories.reference import TaskReferenceLayout, task_joint_count
 
 
 def _smoothstep(s: float) -> float:
@@ -51,13 +53,21 @@ def admittance_step(state: np.ndarray, accel: float, h: float, bound: float) -> 
     return np.array([shift, rate])
 
 
+@functools.lru_cache(maxsize=16)
+def _position_entries(task_size: int) -> tuple[slice, slice, slice]:
+    """Where p_ed, v_ed and a_ed sit in a packed task reference of ``task_size`` entries."""
+    at = TaskReferenceLayout.of(task_joint_count(task_size))
+    return at.p, at.v, at.a
+
+
 def shifted_task(task: np.ndarray, direction: np.ndarray, state: np.ndarray,
                  accel: float) -> np.ndarray:
     """A copy of the packed task reference with ``d direction`` and its derivatives added
-    to the end effector's desired position, velocity and acceleration (World)."""
+    to the end effector's desired position, velocity and acceleration (World; v_ed is also
+    rows 0-2 of y_d', the same entries)."""
     task = np.array(task, dtype=float)
-    ref = unpack_task_reference(task)  # views into the copy
-    ref.p_ed[:] += state[0] * direction
-    ref.v_ed[:] += state[1] * direction  # also y_d' 's rows 0-2: the same entries
-    ref.a_ed[:] += accel * direction
+    p, v, a = _position_entries(task.shape[-1])
+    task[p] += state[0] * direction
+    task[v] += state[1] * direction
+    task[a] += accel * direction
     return task

@@ -109,6 +109,7 @@ class PaperPlusController(ControllerBase):
         self.DeclareDiscreteState(9 + 2 * n)  # group _INTEGRATOR (module constants)
         self._n, self._rows, self._h = n, task.rows, float(period)
         self._params = params
+        self._integrates = params.integrates()
         K = GainMatrices.from_gains(gains, n_task=n)
         self._K_x, self._D_x, self._K_y = K.K_x, K.D_x, K.K_y
         self._k_x = np.asarray(params.com_gain(), float)
@@ -201,6 +202,8 @@ class PaperPlusController(ControllerBase):
         """The integrator state after this sample (class docstring)."""
         n, d = self._n, self._slices
         new = np.zeros_like(state)
+        if not self._integrates:  # zero gains: every bound 0, the state stays all zeros
+            return new
         s = state[:3 + n]
         if diagnostics[d["integration_held"]][0]:  # the command saturates (_run)
             new[:3 + n] = s

@@ -25,9 +25,11 @@ hands the law the references untouched.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
-from aerial_drake.trajectories.reference import unpack_com_reference, unpack_task_reference
+from aerial_drake.trajectories.reference import TaskReferenceLayout, task_joint_count
 
 
 def com_shift(m: float, K_x: np.ndarray, D_x: np.ndarray, k_I: np.ndarray, s: np.ndarray,
@@ -40,11 +42,12 @@ def com_shift(m: float, K_x: np.ndarray, D_x: np.ndarray, k_I: np.ndarray, s: np
         rate, rate_dot: s' and s'' (x~ and x~' while integrating; zero while held).
         force: F^, the external force on the vehicle fed forward (N, World).
     """
+    out = np.empty((3, 3))
     term = k_I * s  # N
-    d2 = -(term + force) / m
-    d3 = (D_x * term / m - k_I * rate) / m
-    d4 = (K_x * term / m - D_x * d3 - k_I * rate_dot) / m
-    return np.stack([d2, d3, d4])
+    out[0] = -(term + force) / m
+    out[1] = (D_x * term / m - k_I * rate) / m
+    out[2] = (K_x * term / m - D_x * out[1] - k_I * rate_dot) / m
+    return out
 
 
 def task_shift(K_y: np.ndarray, k_I: np.ndarray, s: np.ndarray, rate: np.ndarray,
@@ -66,14 +69,23 @@ def task_shift(K_y: np.ndarray, k_I: np.ndarray, s: np.ndarray, rate: np.ndarray
     return e1, e2
 
 
+@functools.lru_cache(maxsize=64)
+def _shift_indices(task_size: int, rows: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """The entries of a packed task reference of ``task_size`` holding the task's ``rows``
+    of y_d' and y_d''."""
+    at = TaskReferenceLayout.of(task_joint_count(task_size))
+    rows_ = np.asarray(rows, dtype=int)
+    return at.full_dot.start + rows_, at.full_ddot.start + rows_
+
+
 def shaped_references(com: np.ndarray, task: np.ndarray, d_com: np.ndarray, e1: np.ndarray,
                       e2: np.ndarray, rows: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
     """Copies of the packed references ``com`` and ``task`` with the shifts added: ``d_com``
-    (3, 3) to the rows x_d'', x_d''', x_d'''' of ``com``; ``e1``, ``e2`` to the task's
-    ``rows`` of y_d', y_d''."""
+    (3, 3) to the second, third and fourth derivatives of x_d in ``com`` (entries 6-14); ``e1``,
+    ``e2`` to the task's ``rows`` of y_d', y_d''."""
     com, task = np.array(com, dtype=float), np.array(task, dtype=float)
-    unpack_com_reference(com)[2:] += d_com  # views into the copies
-    t = unpack_task_reference(task)
-    t.full_dot[list(rows)] += e1
-    t.full_ddot[list(rows)] += e2
+    com[6:15] += d_com.ravel()
+    dot, ddot = _shift_indices(task.shape[-1], tuple(rows))
+    task[dot] += e1
+    task[ddot] += e2
     return com, task
