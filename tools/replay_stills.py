@@ -1,6 +1,6 @@
 """Stills of a run's recorded replay (``replay.html``) at chosen times, for the docs.
 
-    python tools/replay_stills.py SCENARIO [--times 4.5] [--out docs/img]
+    python tools/replay_stills.py SCENARIO [--times 6.0] [--out docs/img]
         [--camera X Y Z --target X Y Z] [--replay-out DIR]
 
 Runs SCENARIO (a shipped name or a YAML path) recorded with the Meshcat view of
@@ -11,9 +11,9 @@ the animation at each time and photographs it: what a reader of the replay sees.
 camera (``aerial_drake.viz.camera.camera_for``), e.g. to look from the robot's side of a wall.
 The run stops 0.1 s after the last time. Needs Chromium (Debian: apt-get install chromium).
 
-The wall press of docs/contact.md (docs/img/replay_wall_press_4.5s.png):
+The wall press of docs/contact.md (docs/img/replay_wall_press_6s.png):
 
-    python tools/replay_stills.py wall_press --times 4.5 \
+    python tools/replay_stills.py wall_press --times 6.0 \
         --camera 0.1 -1.7 1.15 --target 0.75 0 1.45
 """
 
