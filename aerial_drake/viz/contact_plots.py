@@ -1,6 +1,7 @@
 """The figure of a run that touched its environment (``contact.png``; docs/contact.md): the
-pressing force against the desired one, the path across the push, the slip and friction at
-the contact, and what the coupling does (the vehicle's tilt, the CoM's error along the push).
+pressing force against the desired one, the path across the push with the contact points
+(their travel: the slip), the error across the push with the friction ratio, and what the
+coupling does (the vehicle's tilt, the CoM's error along the push).
 
 Drawn from the run's files only: the log's true contact wrench (``contact_wrench``), the
 sensor's reading (``measured_contact_force``), the tracking errors and the scenario's force
@@ -94,23 +95,18 @@ def figure_contact(run: Run) -> Figure:
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_title("the path across the push (World)")
     ax.legend(loc="best", fontsize="small")
-    # Tangential error and slip over time; friction ratio.
+    # The error across the push over time (the slip: the path panel's contact points);
+    # the friction ratio.
     ax = axes[1, 0]
     _grid(ax)
     _shade(ax, task)
     across = np.eye(3) - np.outer(d, d)
     error = (p - p_d) @ across
     ax.plot(t, 1e3 * np.linalg.norm(error, axis=1), color="C0", linewidth=1.0,
-            label="end effector's error across the push (mm)")
-    if touching.any():
-        pts = wrench[:, s["point"]] @ across
-        first = int(np.argmax(touching))
-        slip = np.where(touching, np.linalg.norm(pts - pts[first], axis=1), np.nan)
-        ax.plot(t, 1e3 * slip, color="C1", linewidth=1.0,
-                label="contact point's travel across it (mm)")
-    ax.set_yscale("symlog", linthresh=1.0)
+            label="end effector's error across the push")
+    ax.set_ylabel("error across the push (mm)")
     ax.set_xlabel("t (s)")
-    ax.set_title("tracking across the push, and slip")
+    ax.set_title("tracking across the push; friction (green)")
     ax.legend(loc="upper left", fontsize="small")
     twin = ax.twinx()
     with np.errstate(divide="ignore", invalid="ignore"):
