@@ -59,8 +59,10 @@ def pair_friction(inspector, a, b) -> float:
     mus = []
     for geometry in (a, b):
         props = inspector.GetProximityProperties(geometry)
-        friction = (props.GetPropertyOrDefault("material", "coulomb_friction", None)
-                    if props is not None else None)
+        # (HasProperty first: Drake 1.58's GetPropertyOrDefault refuses a None default.)
+        friction = (props.GetProperty("material", "coulomb_friction")
+                    if props is not None and props.HasProperty("material", "coulomb_friction")
+                    else None)
         mus.append(friction.dynamic_friction() if isinstance(friction, CoulombFriction)
                    else DEFAULT_FRICTION)
     return 2 * mus[0] * mus[1] / (mus[0] + mus[1]) if sum(mus) > 0 else 0.0

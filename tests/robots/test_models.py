@@ -256,7 +256,9 @@ def _check_models_load_from(site, tmp_path):
     assert [float(m) for m in out[1:3]] == pytest.approx([54.8, 54.8])
     # The scenario YAML files ship beside their module (package-data).
     assert out[3].split(",") == ["disturbed", "disturbed_within_limits", "nominal", "orbit",
-                                 "pick_and_place", "quadrotor_ur3e"]
+                                 "pick_and_place", "quadrotor_ur3e",
+                                 "quadrotor_ur3e_surface_slide", "quadrotor_ur3e_wall_press",
+                                 "surface_slide", "wall_press"]
     # The robot descriptions ship with the model files.
     assert out[4].split(",") == ["helicopter_lwr", "quadrotor_ur3e"]
 

@@ -57,9 +57,13 @@ class _Props:
     def __init__(self, friction):
         self._friction = friction
 
-    def GetPropertyOrDefault(self, group, name, default):  # noqa: N802 (Drake's name)
+    def HasProperty(self, group, name):  # noqa: N802 (Drake's name)
         assert (group, name) == ("material", "coulomb_friction")
-        return self._friction if self._friction is not None else default
+        return self._friction is not None
+
+    def GetProperty(self, group, name):  # noqa: N802 (Drake's name)
+        assert (group, name) == ("material", "coulomb_friction") and self._friction is not None
+        return self._friction
 
 
 class _Inspector:
