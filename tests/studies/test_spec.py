@@ -54,7 +54,9 @@ def test_shipped_studies_load():
     sizes = {name: len(runs) for name, runs in plans.items()}
     assert sizes == {"robustness": 200, "gains": 25, "gains_attitude": 25, "directions": 200,
                      "directions_plus": 200, "robustness_plus": 20, "gains_plus": 25,
-                     "gains_attitude_plus": 25}
+                     "gains_attitude_plus": 25,
+                     "contact_robustness": 30, "contact_robustness_ur3e": 30,
+                     "contact_robustness_ur3e_integral": 30}
     # The control draws the robustness study's directions, without its model error.
     robust, control = plans["robustness"], plans["directions"]
     for a, b in zip(robust, control):

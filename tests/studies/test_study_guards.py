@@ -140,8 +140,9 @@ def test_help_lists_every_shipped_study_and_show_run_tells_the_studys_own(capsys
     from aerial_drake.cli.parser import build_parser
     from aerial_drake.studies.spec import shipped_studies
     names = list(shipped_studies())
-    # robustness, directions, gains, gains_attitude and each with _plus
-    assert len(names) == 8
+    # robustness, directions, gains, gains_attitude and each with _plus; the three contact
+    # studies (docs/contact.md)
+    assert len(names) == 11
     text = " ".join(build_parser()._subparsers._group_actions[0].choices["study"]
                     .format_help().split())
     assert all(name in text for name in names)
