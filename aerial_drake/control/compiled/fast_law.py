@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import math
 
+from aerial_drake.control.compiled.fast_rigid_body import _fast_rb_buffers, _fast_rigid_body
 from aerial_drake.control.compiled.fast_section2 import (
     _fast_transformation,
     _lu_factor,
@@ -58,7 +59,6 @@ from aerial_drake.control.compiled.kernels import (
     ASSUMPTION_2,
     NONFINITE,
     OK,
-    _body_sums,
     _damped_inverse_into,
     _damping_squared,
     _desired_attitude,
@@ -72,7 +72,6 @@ from aerial_drake.control.compiled.kernels import (
     _unpack_law,
     _weighted_dot,
 )
-from aerial_drake.control.compiled.kinematics import _kinematics
 from aerial_drake.control.compiled.linalg import (
     _copy,
     _cross_at,
@@ -141,8 +140,10 @@ def _law_fast(x, com, task, heading, command, diagnostics, model, index, work):
     if end > work.shape[0]:
         raise ValueError("workspace too small")
     q, v = x[:p.nq], x[p.nq:]
-    _kinematics(q, tree, s)
-    m, base = _body_sums(v, tree, s)
+    f, end = _fast_rb_buffers(work, end, tree.parent.shape[0], nv)
+    if end > work.shape[0]:
+        raise ValueError("workspace too small")
+    m, base = _fast_rigid_body(q, v, tree, s, p.ee_body, f)
     _fast_transformation(v, s.R_all[base], s)
     R, M, C, T, T_dot, T_inv = s.R_all[base], s.M, s.C, s.T, s.T_dot, s.T_inv
     xi = w.xi
