@@ -33,7 +33,11 @@ from __future__ import annotations
 
 import math
 
-from aerial_drake.control.compiled.fast_rigid_body import _fast_rb_buffers, _fast_rigid_body
+from aerial_drake.control.compiled.fast_rigid_body import (
+    _fast_rb_buffers,
+    _fast_rigid_body,
+    _point_jacobians,
+)
 from aerial_drake.control.compiled.fast_section2 import (
     _fast_transformation,
     _lu_factor,
@@ -67,7 +71,6 @@ from aerial_drake.control.compiled.kernels import (
     _jt_dot_times,
     _lambda_gamma_times,
     _law_buffers,
-    _point_map_into,
     _rotation_angle,
     _unpack_law,
     _weighted_dot,
@@ -77,7 +80,6 @@ from aerial_drake.control.compiled.linalg import (
     _cross_at,
     _cross_into,
     _dot,
-    _hat_into,
     _mm_into,
     _mtm_into,
     _mtv_into,
@@ -143,7 +145,7 @@ def _law_fast(x, com, task, heading, command, diagnostics, model, index, work):
     f, end = _fast_rb_buffers(work, end, tree.parent.shape[0], nv)
     if end > work.shape[0]:
         raise ValueError("workspace too small")
-    m, base = _fast_rigid_body(q, v, tree, s, p.ee_body, f)
+    m, base = _fast_rigid_body(q, v, tree, s, f)
     _fast_transformation(v, s.R_all[base], s)
     R, M, C, T, T_dot, T_inv = s.R_all[base], s.M, s.C, s.T, s.T_dot, s.T_inv
     xi = w.xi
@@ -216,28 +218,12 @@ def _law_fast(x, com, task, heading, command, diagnostics, model, index, work):
     _mv_into(T_dot, u_b, T_dot_u)
     _lambda_gamma_times(M, C, T_inv, w_b_dot, 3, u_b, T_dot_u, w.u2_rho, 3, w.vnv)
 
-    # Task kinematics: the end-effector frame E on body ee_body, and the task's joints.
-    Ri, pi = s.R_all[p.ee_body], s.p_all[p.ee_body]
-    Ji, Ji_dot = s.J[p.ee_body], s.J_dot[p.ee_body]
-    w_i = w.w_i
-    _mv_into(Ji[:3], v, w_i)
-    Pp = w.Pp
-    _point_map_into(p.p_BE, w.hat, Pp)
-    top, top_dot, tmp = w.top[0], w.top[1], w.top[2]
-    _mm_into(Pp, Ji, top)
-    _mm_into(Pp, Ji_dot, top_dot)
-    Rw = w.Rw
-    _hat_into(w_i, w.hat)
-    _mm_into(Ri, w.hat, Rw)
+    # Task kinematics: the end-effector frame E on body ee_body (its World-aligned Jacobian
+    # from the motion columns), and the task's joints.
+    R_WE, p_WE = w.R_WE, w.p_WE
+    _end_effector_pose_into(s.R_all[p.ee_body], s.p_all[p.ee_body], p.R_BE, p.p_BE, R_WE, p_WE)
     J6, J6_dot = w.J6[0], w.J6[1]  # [v_E; w_E] of the whole pose
-    _mm_into(Ri, top, J6[0:3])
-    _mm_into(Ri, Ji[:3], J6[3:6])
-    for (k, A, A_dot) in ((0, top, top_dot), (3, Ji[:3], Ji_dot[:3])):
-        _mm_into(Rw, A, J6_dot[k:k + 3])
-        _mm_into(Ri, A_dot, tmp)
-        for i in range(3):
-            for j in range(nv):
-                J6_dot[k + i, j] += tmp[i, j]
+    _point_jacobians(p_WE, v, tree, p.ee_body, f, J6, J6_dot)
     # The task's rows of [J6; joint rows] (robots.task: row r < 6 a pose row, else a joint).
     J_y, J_y_dot = w.J_y[0], w.J_y[1]
     for i in range(n):
@@ -249,8 +235,6 @@ def _law_fast(x, com, task, heading, command, diagnostics, model, index, work):
                 J_y[i, j], J_y_dot[i, j] = 0.0, 0.0
         if r >= 6:
             J_y[i, p.joint_v[r - 6]] = 1.0
-    R_WE, p_WE = w.R_WE, w.p_WE
-    _end_effector_pose_into(Ri, pi, p.R_BE, p.p_BE, R_WE, p_WE)
 
     # Task control (17)-(20).
     sigma_min = _fast_sigma_min_J3(J_y, T_inv, w)

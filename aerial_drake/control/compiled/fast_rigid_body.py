@@ -32,12 +32,7 @@ from __future__ import annotations
 
 from collections import namedtuple
 
-from aerial_drake.control.compiled.kinematics import (
-    _body_jacobian,
-    _jacobian_derivative,
-    _poses,
-)
-from aerial_drake.control.compiled.linalg import _mv_into
+from aerial_drake.control.compiled.kinematics import _poses
 from aerial_drake.control.compiled.views import _forceinline, _inline, _jit, _mat, _mats
 from aerial_drake.dynamics.kinematic_tree import FREE, REVOLUTE
 
@@ -180,12 +175,12 @@ def _joint_width(joint_type):
 
 
 @_jit
-def _fast_rigid_body(q, v, tree, s, ee_body, f):
+def _fast_rigid_body(q, v, tree, s, f):
     """Section II's rigid-body quantities by the recursions of the module docstring: body poses,
     M, C, J_g, J_g_dot and the CoM into ``s`` (Section II's buffers, as
-    :func:`.kernels._body_sums`), and body ``ee_body``'s Jacobian and its derivative
-    (``s.J[ee_body]``, ``s.J_dot[ee_body]``, as the exact kernel's). ``f``: the buffers of
-    :func:`_fast_rb_buffers`. Returns the total mass and the base body's index."""
+    :func:`.kernels._body_sums`; not the body Jacobians), the motion columns and their
+    derivatives into ``f`` (the buffers of :func:`_fast_rb_buffers`). Returns the total mass
+    and the base body's index."""
     nb, nv = tree.parent.shape[0], v.shape[0]
     parent, joint_type, v_start = tree.parent, tree.joint_type, tree.v_start
     _poses(q, tree, s)
@@ -293,10 +288,36 @@ def _fast_rigid_body(q, v, tree, s, ee_body, f):
             J_g_dot[i, k] = (C[kb + i, k] + C[k, kb + i]) / m
     for i in range(nv):
         M[i, i] += tree.reflected[i]
-    # The end-effector body's Jacobian and its derivative, as the exact kernel's.
-    _body_jacobian(ee_body, tree, s)
-    Jb, Vb = s.J[ee_body], s.V[0]
-    _mv_into(Jb, v[:tree.width[ee_body]], Vb)
-    _jacobian_derivative(Jb, Vb, v, s.R_all[ee_body],
-                         tree.cols[ee_body, :tree.num_cols[ee_body]], s.J_dot[ee_body], s.V[1])
     return m, base
+
+
+@_jit
+def _point_jacobians(p_E, v, tree, b, f, J6, J6_dot):
+    """J6 with [v_E; w_E] = J6 v for the point p_E (in World) of body b, both World-aligned,
+    and its derivative J6_dot, from the motion columns of :func:`_fast_rigid_body` (in ``f``):
+    column k of b's velocities [b_k + a_k x p_E; a_k] for S_k = [a_k; b_k], whose derivative
+    is [b_k' + a_k' x p_E + a_k x v_E; a_k'] (zero columns for the others)."""
+    S, S_dot = f.S, f.S_dot
+    px, py, pz = p_E[0], p_E[1], p_E[2]
+    for i in range(6):
+        for k in range(J6.shape[1]):
+            J6[i, k], J6_dot[i, k] = 0.0, 0.0
+    vx, vy, vz = 0.0, 0.0, 0.0
+    for c in range(tree.num_cols[b]):
+        k = tree.cols[b, c]
+        a0, a1, a2 = S[k, 0], S[k, 1], S[k, 2]
+        l0 = S[k, 3] + (a1 * pz - a2 * py)
+        l1 = S[k, 4] + (a2 * px - a0 * pz)
+        l2 = S[k, 5] + (a0 * py - a1 * px)
+        J6[0, k], J6[1, k], J6[2, k], J6[3, k], J6[4, k], J6[5, k] = l0, l1, l2, a0, a1, a2
+        vx += l0 * v[k]
+        vy += l1 * v[k]
+        vz += l2 * v[k]
+    for c in range(tree.num_cols[b]):
+        k = tree.cols[b, c]
+        a0, a1, a2 = S[k, 0], S[k, 1], S[k, 2]
+        d0, d1, d2 = S_dot[k, 0], S_dot[k, 1], S_dot[k, 2]
+        J6_dot[0, k] = S_dot[k, 3] + (d1 * pz - d2 * py) + (a1 * vz - a2 * vy)
+        J6_dot[1, k] = S_dot[k, 4] + (d2 * px - d0 * pz) + (a2 * vx - a0 * vz)
+        J6_dot[2, k] = S_dot[k, 5] + (d0 * py - d1 * px) + (a0 * vy - a1 * vx)
+        J6_dot[3, k], J6_dot[4, k], J6_dot[5, k] = d0, d1, d2
