@@ -32,9 +32,12 @@ from __future__ import annotations
 
 from collections import namedtuple
 
-from aerial_drake.control.compiled.kinematics import _poses
+import numpy as np
+
+from aerial_drake.control.compiled.kernels import _section2_buffers, _workspace_size
+from aerial_drake.control.compiled.kinematics import _pack_tree, _poses, _unpack_tree
 from aerial_drake.control.compiled.views import _forceinline, _inline, _jit, _mat, _mats
-from aerial_drake.dynamics.kinematic_tree import FREE, REVOLUTE
+from aerial_drake.dynamics.kinematic_tree import FREE, REVOLUTE, KinematicTree
 
 #: The recursions' buffers (see :func:`_fast_rb_buffers`): the motion columns S and their
 #: derivatives (one row per velocity), each body's spatial velocity in World, the composite
@@ -321,3 +324,34 @@ def _point_jacobians(p_E, v, tree, b, f, J6, J6_dot):
         J6_dot[1, k] = S_dot[k, 4] + (d2 * px - d0 * pz) + (a2 * vx - a0 * vz)
         J6_dot[2, k] = S_dot[k, 5] + (d0 * py - d1 * px) + (a0 * vy - a1 * vx)
         J6_dot[3, k], J6_dot[4, k], J6_dot[5, k] = d0, d1, d2
+
+
+@_jit
+def _fast_rigid_body_at(q, v, model, index, work):
+    """:func:`_fast_rigid_body` at ``(q, v)`` with the packed tree, and :func:`_point_jacobians`
+    at every body's origin; copies of the results (see :func:`fast_rigid_body`)."""
+    tree, _, _ = _unpack_tree(model, index)
+    nb, nv = tree.parent.shape[0], v.shape[0]
+    s, at = _section2_buffers(work, 0, nb, nv)
+    f, end = _fast_rb_buffers(work, at, nb, nv)
+    if end > work.shape[0]:
+        raise ValueError("workspace too small")
+    m, base = _fast_rigid_body(q, v, tree, s, f)
+    J6 = np.empty((nb, 2, 6, nv))
+    for b in range(nb):
+        _point_jacobians(s.p_all[b], v, tree, b, f, J6[b, 0], J6[b, 1])
+    return (m, base, s.M.copy(), s.C.copy(), s.J_g.copy(), s.J_g_dot.copy(), s.p_WG.copy(),
+            J6)
+
+
+def fast_rigid_body(tree: KinematicTree, q: np.ndarray, v: np.ndarray) -> dict:
+    """The fast kernel's rigid-body quantities at ``(q, v)`` by name: ``m``, ``base``, ``M``,
+    ``C``, ``J_g``, ``J_g_dot``, ``p_WG``, and ``J6`` (per body of ``tree``, the World-aligned
+    Jacobian [v; w] of its origin and its derivative, (nb, 2, 6, nv)). For tests."""
+    model, index = _pack_tree(tree)
+    nb, nv = tree.parent.size, tree.reflected_inertia.size
+    size = _workspace_size(nb, nv, False) + fast_rigid_body_size(nb, nv)
+    values = _fast_rigid_body_at(np.ascontiguousarray(q, dtype=float),
+                                 np.ascontiguousarray(v, dtype=float), model, index,
+                                 np.zeros(size))
+    return dict(zip(("m", "base", "M", "C", "J_g", "J_g_dot", "p_WG", "J6"), values))
