@@ -5,8 +5,14 @@ kernel's to round-off (about 1e-13 relative), not to the bit. Chosen by the scen
 kernel is the paper runs' and stays bit for bit what it was.
 
 The changes, all in :func:`_law_fast` (otherwise :func:`.kernels._law`'s statements, the same
-workspace, the same outputs and diagnostics):
+workspace with the recursions' buffers after it, the same outputs and diagnostics):
 
+- The rigid-body part by :func:`.fast_rigid_body._fast_rigid_body`: M and C by recursions
+  over the tree (composite inertias in World) instead of the sums over bodies of J^T I J and
+  J^T (I J_dot + A J / 2); J_g, J_g_dot from M's rows; no body Jacobian. The end effector's
+  World-aligned Jacobian and its derivative (J6) from the recursion's motion columns
+  (:func:`.fast_rigid_body._point_jacobians`) instead of its body's body-frame Jacobian and
+  derivative and their products with the point map and the rotation.
 - Section II by :func:`.fast_section2._fast_transformation`: T^-1 in closed form from T's
   blocks instead of Gaussian elimination on T, one Cholesky factorisation of Z M Z^T for N
   and N_dot (the exact kernel factors it twice).
@@ -25,8 +31,8 @@ workspace, the same outputs and diagnostics):
   products with T^-1 and M and a solve with J_3^T.
 
 numba caches :func:`_law_fast`'s machine code keyed on this file only (see
-:mod:`.kernels`): after editing :mod:`.kernels` or :mod:`.fast_section2`, touch this file so
-that the fast law recompiles with them.
+:mod:`.kernels`): after editing :mod:`.kernels`, :mod:`.kinematics`, :mod:`.fast_section2` or
+:mod:`.fast_rigid_body`, touch this file so that the fast law recompiles with them.
 """
 
 from __future__ import annotations
