@@ -16,7 +16,7 @@ parameters).
 
 The same rounds time the law's fast kernel (``controller.kernel: fast``,
 :mod:`aerial_drake.control.compiled.fast_law`: the same law to round-off) on the same inputs,
-and its Section II, and print fast / exact and fast law / Pinocchio.
+its rigid-body part and its Section II, and print fast / exact and fast law / Pinocchio.
 
 The machine's speed drifts: compare two versions of the law in one process, alternating
 (e.g. with this script's ``time_calls`` on both), not across runs.
@@ -38,6 +38,7 @@ PINOCCHIO = "Pinocchio rigid-body calls"
 RIGID_BODY = "the law's rigid-body part"
 SECTION_II = "the law's Section II"
 FAST = "fast kernel CompiledLaw.__call__"
+FAST_RIGID_BODY = "the fast kernel's rigid-body part"
 FAST_SECTION_II = "the fast kernel's Section II"
 #: Where the Pinocchio model of a Drake plant is built (shared with the oracle tests).
 TESTS = Path(__file__).resolve().parent.parent / "tests"
@@ -64,15 +65,22 @@ def pinocchio_calls(controller, inputs):
     the law's inputs, and the inputs in Pinocchio's coordinates; None without Pinocchio.
 
     The same quantities: the mass matrix M (``crba``), the Christoffel-consistent Coriolis
-    matrix C (``computeCoriolisMatrix``), every body's Jacobian and its time derivative
-    (``computeJointJacobiansTimeVariation``), the end-effector frame's pose, World-aligned
-    Jacobian and its derivative (``updateFramePlacements``, ``getFrameJacobian``,
-    ``getFrameJacobianTimeVariation``), and the CoM, its Jacobian J_g and J_g_dot (the linear
-    rows of the centroidal map and its derivative, over the mass:
+    matrix C (``computeCoriolisMatrix``, which also leaves every joint's Jacobian and its time
+    derivative, in World, in ``data.J`` and ``data.dJ``), the end-effector frame's pose,
+    World-aligned Jacobian and its derivative (``updateFramePlacements``, ``getFrameJacobian``,
+    ``getFrameJacobianTimeVariation``, from those), and the CoM, its Jacobian J_g and J_g_dot
+    (the linear rows of the centroidal map and its derivative, over the mass:
     ``computeCentroidalMapTimeVariation``). Not the generalized gravity (the law never forms
     it: gravity enters (10) at the CoM). Not timed: Drake's state to Pinocchio's (done once per
     state here) and the velocity map between the two libraries' base velocities; the law does
     everything else on top (Section II's T, T^-1, N, N_dot and the law (10)-(22)).
+
+    Until 2026-12-05 (issue 29, item 3) this also called
+    ``computeJointJacobiansTimeVariation``, for the exact kernel's every body's Jacobian and
+    its derivative: a second pass for what ``computeCoriolisMatrix`` already leaves (the
+    frame's Jacobian and derivative are equal to the bit without it), about 0.9 us. The fast
+    kernel forms no body Jacobian but the end effector's; both kernels are now held against
+    Pinocchio without that call.
     """
     if importlib.util.find_spec("pinocchio") is None:
         return None
@@ -91,8 +99,7 @@ def pinocchio_calls(controller, inputs):
 
     def rigid_body_quantities(q, v):
         pin.crba(model, data, q)
-        pin.computeCoriolisMatrix(model, data, q, v)
-        pin.computeJointJacobiansTimeVariation(model, data, q, v)
+        pin.computeCoriolisMatrix(model, data, q, v)  # and data.J, data.dJ
         pin.updateFramePlacements(model, data)
         pin.getFrameJacobian(model, data, fid, world_aligned)
         pin.getFrameJacobianTimeVariation(model, data, fid, world_aligned)
@@ -109,13 +116,20 @@ def pinocchio_calls(controller, inputs):
 
 
 def law_phases(controller):
-    """Three callables on the law's inputs: the compiled law's rigid-body part (kinematics
-    and the body sums: M, C, every body's Jacobian and its derivative, J_g, J_g_dot, the CoM),
-    its Section II (that and the transformation (3)-(4): T, T^-1, N, N_dot), and the fast
-    kernel's Section II, run alone with the law's own kernels in its workspace (the law's
-    arithmetic; the outputs discarded)."""
+    """Four callables on the law's inputs: the exact kernel's rigid-body part (kinematics and
+    the body sums: M, C, every body's Jacobian and its derivative, J_g, J_g_dot, the CoM), its
+    Section II (that and the transformation (3)-(4): T, T^-1, N, N_dot), the fast kernel's
+    rigid-body part (:mod:`aerial_drake.control.compiled.fast_rigid_body`: the recursions for
+    M, C, J_g, J_g_dot, the CoM; the end effector's Jacobian is formed later, in the law) and
+    its Section II, run alone with the kernels' own functions in a workspace of their own (the
+    kernels' arithmetic; the outputs discarded)."""
     from numba import njit
 
+    from aerial_drake.control.compiled.fast_rigid_body import (
+        _fast_rb_buffers,
+        _fast_rigid_body,
+        fast_rigid_body_size,
+    )
     from aerial_drake.control.compiled.fast_section2 import _fast_transformation
     from aerial_drake.control.compiled.kernels import (
         _body_sums,
@@ -126,32 +140,34 @@ def law_phases(controller):
     from aerial_drake.control.compiled.kinematics import _kinematics
 
     @njit(cache=True, nogil=True, error_model="numpy")
-    def phase(x, model, index, work, section2):
+    def phase(x, model, index, work, kernel, section2):
         tree, p = _unpack_law(model, index)
-        nv = tree.reflected.shape[0]
-        s, _, _ = _law_buffers(work, tree.parent.shape[0], nv)
+        nb, nv = tree.parent.shape[0], tree.reflected.shape[0]
+        s, _, end = _law_buffers(work, nb, nv)
         q, v = x[:p.nq], x[p.nq:]
-        _kinematics(q, tree, s)
-        m, base = _body_sums(v, tree, s)
-        if section2 == 1:
-            _transformation(v, s.R_all[base], s)
-        elif section2 == 2:
-            _fast_transformation(v, s.R_all[base], s)
+        if kernel == 0:
+            _kinematics(q, tree, s)
+            m, base = _body_sums(v, tree, s)
+            if section2:
+                _transformation(v, s.R_all[base], s)
+        else:
+            f, _ = _fast_rb_buffers(work, end, nb, nv)
+            m, base = _fast_rigid_body(q, v, tree, s, f)
+            if section2:
+                _fast_transformation(v, s.R_all[base], s)
         return m
 
     law = controller._compiled
-    work = np.zeros_like(law._work)  # not the law's: its buffers stay as the law left them
+    # Not the law's workspace (its buffers stay as the law left them); the fast kernel's size.
+    work = np.zeros(law._work.size + fast_rigid_body_size(int(law._index[0]),
+                                                          int(law._index[1])))
 
-    def rigid_body_part(x, com, task, heading):
-        phase(x, law._model, law._index, work, 0)
+    def call(kernel, section2):
+        def run(x, com, task, heading):
+            phase(x, law._model, law._index, work, kernel, section2)
+        return run
 
-    def section_ii(x, com, task, heading):
-        phase(x, law._model, law._index, work, 1)
-
-    def fast_section_ii(x, com, task, heading):
-        phase(x, law._model, law._index, work, 2)
-
-    return rigid_body_part, section_ii, fast_section_ii
+    return call(0, False), call(0, True), call(1, False), call(1, True)
 
 
 def fast_kernel(controller, command, diagnostics):
@@ -212,7 +228,7 @@ def main() -> None:
           f"python {platform.python_version()}, load average {_load()}")
     per_round = max(args.calls // args.rounds, 20)
     kinds = ("CompiledLaw.__call__", FAST, "DecoupledController.evaluate", RIGID_BODY,
-             SECTION_II, FAST_SECTION_II, PINOCCHIO)
+             SECTION_II, FAST_RIGID_BODY, FAST_SECTION_II, PINOCCHIO)
     times: dict = {(name, kind): [] for name in subjects for kind in kinds}
     for _ in range(args.rounds):  # interleaved: each robot and each subject in every round
         for name, (controller, inputs, kernel, pin_calls, phases, fast) in subjects.items():
@@ -222,7 +238,8 @@ def main() -> None:
                                         inputs),
                                        (RIGID_BODY, phases[0], inputs),
                                        (SECTION_II, phases[1], inputs),
-                                       (FAST_SECTION_II, phases[2], inputs),
+                                       (FAST_RIGID_BODY, phases[2], inputs),
+                                       (FAST_SECTION_II, phases[3], inputs),
                                        (PINOCCHIO, *(pin_calls or (None, None)))):
                 if evaluate is not None:
                     times[name, kind].append(1e6 * time_calls(evaluate, on, per_round))
@@ -254,7 +271,8 @@ def main() -> None:
                   "test extra) is not installed")
             continue
         for kind, what in (("CompiledLaw.__call__", "law"), (FAST, "fast law"),
-                           (RIGID_BODY, "the law's rigid-body part")):
+                           (RIGID_BODY, "the law's rigid-body part"),
+                           (FAST_RIGID_BODY, "the fast kernel's rigid-body part")):
             law_chunks = times[name, kind]
             # The ratio of the medians, and its spread over the rounds (each round's medians).
             ratio = np.median(np.concatenate(law_chunks)) / np.median(np.concatenate(pin_chunks))

@@ -5,8 +5,14 @@ kernel's to round-off (about 1e-13 relative), not to the bit. Chosen by the scen
 kernel is the paper runs' and stays bit for bit what it was.
 
 The changes, all in :func:`_law_fast` (otherwise :func:`.kernels._law`'s statements, the same
-workspace, the same outputs and diagnostics):
+workspace with the recursions' buffers after it, the same outputs and diagnostics):
 
+- The rigid-body part by :func:`.fast_rigid_body._fast_rigid_body`: M and C by recursions
+  over the tree (composite inertias in World) instead of the sums over bodies of J^T I J and
+  J^T (I J_dot + A J / 2); J_g, J_g_dot from M's rows; no body Jacobian. The end effector's
+  World-aligned Jacobian and its derivative (J6) from the recursion's motion columns
+  (:func:`.fast_rigid_body._point_jacobians`) instead of its body's body-frame Jacobian and
+  derivative and their products with the point map and the rotation.
 - Section II by :func:`.fast_section2._fast_transformation`: T^-1 in closed form from T's
   blocks instead of Gaussian elimination on T, one Cholesky factorisation of Z M Z^T for N
   and N_dot (the exact kernel factors it twice).
@@ -25,14 +31,19 @@ workspace, the same outputs and diagnostics):
   products with T^-1 and M and a solve with J_3^T.
 
 numba caches :func:`_law_fast`'s machine code keyed on this file only (see
-:mod:`.kernels`): after editing :mod:`.kernels` or :mod:`.fast_section2`, touch this file so
-that the fast law recompiles with them.
+:mod:`.kernels`): after editing :mod:`.kernels`, :mod:`.kinematics`, :mod:`.fast_section2` or
+:mod:`.fast_rigid_body`, touch this file so that the fast law recompiles with them.
 """
 
 from __future__ import annotations
 
 import math
 
+from aerial_drake.control.compiled.fast_rigid_body import (
+    _fast_rb_buffers,
+    _fast_rigid_body,
+    _point_jacobians,
+)
 from aerial_drake.control.compiled.fast_section2 import (
     _fast_transformation,
     _lu_factor,
@@ -58,7 +69,6 @@ from aerial_drake.control.compiled.kernels import (
     ASSUMPTION_2,
     NONFINITE,
     OK,
-    _body_sums,
     _damped_inverse_into,
     _damping_squared,
     _desired_attitude,
@@ -67,18 +77,15 @@ from aerial_drake.control.compiled.kernels import (
     _jt_dot_times,
     _lambda_gamma_times,
     _law_buffers,
-    _point_map_into,
     _rotation_angle,
     _unpack_law,
     _weighted_dot,
 )
-from aerial_drake.control.compiled.kinematics import _kinematics
 from aerial_drake.control.compiled.linalg import (
     _copy,
     _cross_at,
     _cross_into,
     _dot,
-    _hat_into,
     _mm_into,
     _mtm_into,
     _mtv_into,
@@ -141,8 +148,10 @@ def _law_fast(x, com, task, heading, command, diagnostics, model, index, work):
     if end > work.shape[0]:
         raise ValueError("workspace too small")
     q, v = x[:p.nq], x[p.nq:]
-    _kinematics(q, tree, s)
-    m, base = _body_sums(v, tree, s)
+    f, end = _fast_rb_buffers(work, end, tree.parent.shape[0], nv)
+    if end > work.shape[0]:
+        raise ValueError("workspace too small")
+    m, base = _fast_rigid_body(q, v, tree, s, f)
     _fast_transformation(v, s.R_all[base], s)
     R, M, C, T, T_dot, T_inv = s.R_all[base], s.M, s.C, s.T, s.T_dot, s.T_inv
     xi = w.xi
@@ -215,28 +224,12 @@ def _law_fast(x, com, task, heading, command, diagnostics, model, index, work):
     _mv_into(T_dot, u_b, T_dot_u)
     _lambda_gamma_times(M, C, T_inv, w_b_dot, 3, u_b, T_dot_u, w.u2_rho, 3, w.vnv)
 
-    # Task kinematics: the end-effector frame E on body ee_body, and the task's joints.
-    Ri, pi = s.R_all[p.ee_body], s.p_all[p.ee_body]
-    Ji, Ji_dot = s.J[p.ee_body], s.J_dot[p.ee_body]
-    w_i = w.w_i
-    _mv_into(Ji[:3], v, w_i)
-    Pp = w.Pp
-    _point_map_into(p.p_BE, w.hat, Pp)
-    top, top_dot, tmp = w.top[0], w.top[1], w.top[2]
-    _mm_into(Pp, Ji, top)
-    _mm_into(Pp, Ji_dot, top_dot)
-    Rw = w.Rw
-    _hat_into(w_i, w.hat)
-    _mm_into(Ri, w.hat, Rw)
+    # Task kinematics: the end-effector frame E on body ee_body (its World-aligned Jacobian
+    # from the motion columns), and the task's joints.
+    R_WE, p_WE = w.R_WE, w.p_WE
+    _end_effector_pose_into(s.R_all[p.ee_body], s.p_all[p.ee_body], p.R_BE, p.p_BE, R_WE, p_WE)
     J6, J6_dot = w.J6[0], w.J6[1]  # [v_E; w_E] of the whole pose
-    _mm_into(Ri, top, J6[0:3])
-    _mm_into(Ri, Ji[:3], J6[3:6])
-    for (k, A, A_dot) in ((0, top, top_dot), (3, Ji[:3], Ji_dot[:3])):
-        _mm_into(Rw, A, J6_dot[k:k + 3])
-        _mm_into(Ri, A_dot, tmp)
-        for i in range(3):
-            for j in range(nv):
-                J6_dot[k + i, j] += tmp[i, j]
+    _point_jacobians(p_WE, v, tree, p.ee_body, f, J6, J6_dot)
     # The task's rows of [J6; joint rows] (robots.task: row r < 6 a pose row, else a joint).
     J_y, J_y_dot = w.J_y[0], w.J_y[1]
     for i in range(n):
@@ -248,8 +241,6 @@ def _law_fast(x, com, task, heading, command, diagnostics, model, index, work):
                 J_y[i, j], J_y_dot[i, j] = 0.0, 0.0
         if r >= 6:
             J_y[i, p.joint_v[r - 6]] = 1.0
-    R_WE, p_WE = w.R_WE, w.p_WE
-    _end_effector_pose_into(Ri, pi, p.R_BE, p.p_BE, R_WE, p_WE)
 
     # Task control (17)-(20).
     sigma_min = _fast_sigma_min_J3(J_y, T_inv, w)

@@ -117,6 +117,15 @@ def _kinematics(q, tree, s):
     """Body poses in World (``s.R_all``, ``s.p_all``) and body-frame spatial velocity Jacobians
     ``[w; v]`` about each body origin (``s.J``: Drake's ``CalcJacobianSpatialVelocity(kV, B, 0,
     World, B)``)."""
+    _poses(q, tree, s)
+    for b in range(tree.parent.shape[0]):
+        _body_jacobian(b, tree, s)
+
+
+@_inline
+def _poses(q, tree, s):
+    """Body poses in World (``s.R_all``, ``s.p_all``), the joints' axes and origins in World
+    (``s.axis_W``, ``s.origin_W``)."""
     parent, joint_type, q_start, axis_F = tree.parent, tree.joint_type, tree.q_start, tree.axis_F
     R_all, p_all, axis_W, origin_W = s.R_all, s.p_all, s.axis_W, s.origin_W
     R_WF, R_FM, R_WM, p_WF = s.frames[0], s.frames[1], s.frames[2], s.frames[3, 0]
@@ -146,31 +155,36 @@ def _kinematics(q, tree, s):
         _mm3_into(R_WM, tree.R_MC[b], R_all[b])
         _affine_into(origin_W[b], R_WM, tree.p_MC[b], p_all[b])
 
+
+@_inline
+def _body_jacobian(b, tree, s):
+    """Body b's body-frame Jacobian ``s.J[b]`` (see :func:`_kinematics`), from the poses."""
+    parent, joint_type = tree.parent, tree.joint_type
+    R_all, p_all, axis_W, origin_W = s.R_all, s.p_all, s.axis_W, s.origin_W
     J = s.J  # at the bodies' Jacobian columns only (see _section2_buffers)
-    for b in range(parent.shape[0]):
-        R = R_all[b]
-        a = b
-        while a >= 0:
-            k = tree.v_start[a]
-            rx = p_all[b, 0] - origin_W[a, 0]
-            ry = p_all[b, 1] - origin_W[a, 1]
-            rz = p_all[b, 2] - origin_W[a, 2]
-            if joint_type[a] == REVOLUTE:
-                wx, wy, wz = axis_W[a, 0], axis_W[a, 1], axis_W[a, 2]
-                lx, ly, lz = wy * rz - wz * ry, wz * rx - wx * rz, wx * ry - wy * rx
-                for i in range(3):  # R^T [w; w x r]
-                    J[b, i, k] = R[0, i] * wx + R[1, i] * wy + R[2, i] * wz
-                    J[b, 3 + i, k] = R[0, i] * lx + R[1, i] * ly + R[2, i] * lz
-            elif joint_type[a] == FREE:
-                # Columns of w_WB (e_j, e_j x r) and of v_WBo (0, e_j), in the body frame.
-                for i in range(3):
-                    J[b, i, k], J[b, i, k + 1], J[b, i, k + 2] = R[0, i], R[1, i], R[2, i]
-                    J[b, 3 + i, k + 3], J[b, 3 + i, k + 4], J[b, 3 + i, k + 5] = \
-                        R[0, i], R[1, i], R[2, i]
-                    J[b, 3 + i, k] = R[2, i] * ry - R[1, i] * rz  # R^T (e_x x r)
-                    J[b, 3 + i, k + 1] = R[0, i] * rz - R[2, i] * rx
-                    J[b, 3 + i, k + 2] = R[1, i] * rx - R[0, i] * ry
-            a = parent[a]
+    R = R_all[b]
+    a = b
+    while a >= 0:
+        k = tree.v_start[a]
+        rx = p_all[b, 0] - origin_W[a, 0]
+        ry = p_all[b, 1] - origin_W[a, 1]
+        rz = p_all[b, 2] - origin_W[a, 2]
+        if joint_type[a] == REVOLUTE:
+            wx, wy, wz = axis_W[a, 0], axis_W[a, 1], axis_W[a, 2]
+            lx, ly, lz = wy * rz - wz * ry, wz * rx - wx * rz, wx * ry - wy * rx
+            for i in range(3):  # R^T [w; w x r]
+                J[b, i, k] = R[0, i] * wx + R[1, i] * wy + R[2, i] * wz
+                J[b, 3 + i, k] = R[0, i] * lx + R[1, i] * ly + R[2, i] * lz
+        elif joint_type[a] == FREE:
+            # Columns of w_WB (e_j, e_j x r) and of v_WBo (0, e_j), in the body frame.
+            for i in range(3):
+                J[b, i, k], J[b, i, k + 1], J[b, i, k + 2] = R[0, i], R[1, i], R[2, i]
+                J[b, 3 + i, k + 3], J[b, 3 + i, k + 4], J[b, 3 + i, k + 5] = \
+                    R[0, i], R[1, i], R[2, i]
+                J[b, 3 + i, k] = R[2, i] * ry - R[1, i] * rz  # R^T (e_x x r)
+                J[b, 3 + i, k + 1] = R[0, i] * rz - R[2, i] * rx
+                J[b, 3 + i, k + 2] = R[1, i] * rx - R[0, i] * ry
+        a = parent[a]
 
 
 @_inline

@@ -11,6 +11,7 @@ import numpy as np
 from numba import types
 
 from aerial_drake.control.compiled.fast_law import _law_fast
+from aerial_drake.control.compiled.fast_rigid_body import fast_rigid_body_size
 from aerial_drake.control.compiled.kernels import (
     GAIN_LAYOUT,
     LIMITS_SIZE,
@@ -211,7 +212,9 @@ class CompiledLaw:
                                              (sigma_min_J3_limit, f_d_limit,
                                               singularity.damping, singularity.threshold))
         self._n_joints = task.n_joints
-        self._work = np.zeros(_workspace_size(nb, nv, True))
+        # The fast kernel's recursions work after the exact law's buffers.
+        extra = fast_rigid_body_size(nb, nv) if kernel == "fast" else 0
+        self._work = np.zeros(_workspace_size(nb, nv, True) + extra)
         self._nq, self._nv = int(num_positions), nv
         self._compile()
 
