@@ -35,8 +35,8 @@ FORCE_DIAGNOSTICS = (("force_desired", 1), ("force_measured", 1), ("force_shift"
 
 
 class PaperForceController(PaperPlusController):
-    """paper_plus with the force task of ``force`` (module docstring). Input ports: paper_
-    plus's and ``contact_force`` (3, N, World; unconnected: zero, no contact)."""
+    """``paper_plus`` with the force task of ``force`` (module docstring). Input ports:
+    ``paper_plus``'s and ``contact_force`` (3, N, World; unconnected: zero, no contact)."""
 
     def __init__(self, model: AerialManipulator, gains, plus, force: ForceTaskParams,
                  limits: tuple[np.ndarray, np.ndarray], **kwargs) -> None:
