@@ -52,6 +52,10 @@ class PaperForceController(PaperPlusController):
         self._force = force
         self._direction = np.asarray(force.unit_direction(), float)
         self._contact_port = self.DeclareVectorInputPort("contact_force", 3)
+        # y~'s entries of the end effector's World x, y, z (all three, or None).
+        position = {r: i for i, r in enumerate(task.rows) if r < 3}
+        self._position_rows = ([position[r] for r in range(3)] if len(position) == 3
+                               else None)
         self.DeclareDiscreteState(2)  # group _ADMITTANCE: (d, d')
         # (d, d') and the measured force this sample runs on; the latest sample's, for
         # evaluate_into.
@@ -77,6 +81,19 @@ class PaperForceController(PaperPlusController):
         diagnostics[d["force_measured"]] = pressing
         diagnostics[d["force_shift"]] = adm[0]
         self._accel = accel
+
+    def _integrated_task_error(self, y_tilde: np.ndarray) -> np.ndarray:
+        """paper_plus's task integral (``controller.plus.task_integral_gain``) across the push
+        only: along it the force loop is the integral (the admittance integrates the force
+        error), and a second integral there winds up while the force builds (measured: a
+        touch overshooting to 11.3 N for 10 N). Needs the task's three position rows; with
+        fewer, y~ as it is."""
+        rows = self._position_rows
+        if rows is None:
+            return y_tilde
+        out = np.array(y_tilde, dtype=float)
+        out[rows] -= (out[rows] @ self._direction) * self._direction
+        return out
 
     def evaluate_into(self, t, x, com, task, heading, command, diagnostics) -> None:
         self._pending = self._latest_force

@@ -208,7 +208,8 @@ class PaperPlusController(ControllerBase):
         if diagnostics[d["integration_held"]][0]:  # the command saturates (_run)
             new[:3 + n] = s
             return new
-        error = np.concatenate([diagnostics[d["x_tilde"]], diagnostics[d["y_tilde"]]])
+        error = np.concatenate([diagnostics[d["x_tilde"]],
+                                self._integrated_task_error(diagnostics[d["y_tilde"]])])
         stepped = np.clip(s + self._h * error, -self._bound, self._bound)
         new[:3 + n] = stepped
         free = np.abs(stepped) < self._bound  # entries not on their bound
@@ -217,6 +218,11 @@ class PaperPlusController(ControllerBase):
         new[6 + n:9 + n] = np.where(free[:3], diagnostics[d["x_tilde_dot"]], 0.0)
         new[9 + n:] = rate[3:]
         return new
+
+    def _integrated_task_error(self, y_tilde: np.ndarray) -> np.ndarray:
+        """The task error the integral s_y takes in (y~ itself; a subclass may leave out
+        directions another loop integrates, as ``paper_force`` the push's)."""
+        return y_tilde
 
     def _sample(self, context: Context, discrete_state) -> None:
         self._step(context, discrete_state, advance=True)
