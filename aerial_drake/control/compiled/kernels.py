@@ -652,34 +652,23 @@ def _workspace_size(nb, nv, law):
     return _law_buffers(nowhere, nb, nv)[-1] if law else _section2_buffers(nowhere, 0, nb, nv)[-1]
 
 
-@_jit
-def _law(x, com, task, heading, command, diagnostics, model, index, work):
-    """The law (10)-(22) at state ``x``, as control.compute_control; writes ``command``
-    ``[f, mu, tau]`` and ``diagnostics`` (control.law.diagnostics_layout(n)). Returns
-    ``(status, f_d_norm, sigma_min)``; on a status other than OK the outputs are incomplete.
-    ``model``, ``index``: packed by CompiledLaw; ``work``: sized by :func:`_law_buffers`."""
-    for i in range(x.shape[0]):
-        if not math.isfinite(x[i]):
-            return NONFINITE, 0.0, 0.0
-    tree, p = _unpack_law(model, index)
-    nv = tree.reflected.shape[0]
-    n = nv - 6
-    s, w, end = _law_buffers(work, tree.parent.shape[0], nv)
-    if end > work.shape[0]:
-        raise ValueError("workspace too small")
-    q, v = x[:p.nq], x[p.nq:]
-    m, base = _section2(q, v, tree, s)
-    R, M, C, T, T_dot, T_inv = s.R_all[base], s.M, s.C, s.T, s.T_dot, s.T_inv
-    xi = w.xi
-    _mv_into(T, v, xi)
-    gains = p.gains
-    K_x, D_x = _gain(gains, _K_X, n), _gain(gains, _D_X, n)
-    k_R, k_w = _gain(gains, _K_R, n)[0], _gain(gains, _K_W, n)[0]
-    L2, L2_inv = _gain(gains, _L2, n), _gain(gains, _L2_INV, n)
-    K_y, K_z = _gain(gains, _K_Y, n), _gain(gains, _K_Z, n)
-    gamma1, gamma2 = _gain(gains, _GAMMA1, n)[0], _gain(gains, _GAMMA2, n)[0]
-    gravity = _gain(gains, _GRAVITY, n)[0]
-    w_b, rho = xi[3:6], xi[6:]
+@_inline
+def _law_gains(gains, n):
+    """The law's gains from the packed ``gains`` (GAIN_LAYOUT): (K_x, D_x, k_R, k_w, L2,
+    L2_inv, K_y, K_z, gamma1, gamma2, gravity)."""
+    return (_gain(gains, _K_X, n), _gain(gains, _D_X, n), _gain(gains, _K_R, n)[0],
+            _gain(gains, _K_W, n)[0], _gain(gains, _L2, n), _gain(gains, _L2_INV, n),
+            _gain(gains, _K_Y, n), _gain(gains, _K_Z, n), _gain(gains, _GAMMA1, n)[0],
+            _gain(gains, _GAMMA2, n)[0], _gain(gains, _GRAVITY, n)[0])
+
+
+@_inline
+def _com_and_attitude(m, R, s, xi, com, heading, K_x, D_x, k_R, k_w, L2_inv, gravity,
+                      f_d_limit, M, C, T_inv, T_dot, w):
+    """The CoM control (10)-(11) and the attitude control (12)-(16) with u2 and Gamma23 rho
+    of (8), into ``w``'s buffers, shared by both kernels. Returns ``(ok, f_d_norm, u1)``;
+    ``ok`` False: Assumption 2 fails (|f_d| not above ``f_d_limit``), nothing after (10)."""
+    w_b = xi[3:6]
     x_d, xd1, xd2, xd3, xd4 = com[0:3], com[3:6], com[6:9], com[9:12], com[12:15]
     Re3, Re3_dot = w.Re3[0], w.Re3[1]
     x_t, x_t_dot, x_t_dd = w.x_t[0], w.x_t[1], w.x_t[2]
@@ -694,8 +683,8 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
         x_t_dot[i] = xi[i] - xd1[i]
         f_d[i] = m * (xd2[i] + gravity * e3[i]) - K_x[i] * x_t[i] - D_x[i] * x_t_dot[i]  # (10)
     f_d_norm = _norm(f_d)
-    if not f_d_norm > p.limits[_F_D_LIMIT]:
-        return ASSUMPTION_2, f_d_norm, 0.0
+    if not f_d_norm > f_d_limit:
+        return False, f_d_norm, 0.0
     u1 = _dot(f_d, Re3)  # (11)
     for i in range(3):  # (9a), for the attitude feed-forward
         xg_dd[i] = u1 * Re3[i] / m - gravity * e3[i]
@@ -739,6 +728,122 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
     _mv_into(T_inv, xi[3:], u_b, 3)
     _mv_into(T_dot, u_b, T_dot_u)
     _lambda_gamma_times(M, C, T_inv, w_b_dot, 3, u_b, T_dot_u, w.u2_rho, 3, w.vnv)
+    return True, f_d_norm, u1
+
+
+@_inline
+def _task_errors(x, task, p, R_WE, p_WE, xi, rho, K_y, T_inv, T_dot, n, w):
+    """The task's errors and their references, (17)-(18) and (20), into ``w``'s buffers:
+    y~, y~', y_d', y_d'', z, z~, z_d and z_d', with J = J_y T^-1 and J_3 in ``w.Jt``,
+    ``w.J3`` and J_y_dot in ``w.J_y[1]``; shared by both kernels."""
+    Jt, J3, J_y_dot, T_dot_u = w.Jt, w.J3, w.J_y[1], w.u[3]
+    xg_dd, w_b_dot = w.xg_dd, w.w_b_dot
+    R_err = w.R_err
+    _mm_into(R_WE, task[3:12].reshape((3, 3)).T, R_err)
+    y_t, y_t_dot, y6 = w.y_t[0], w.y_t[1], w.y6
+    for i in range(3):
+        y6[i] = p_WE[i] - task[i]
+    _vee_into(R_err, y6[3:6])
+    # The task reference's full y_d_dot, y_d_ddot blocks (reference.TaskReferenceLayout).
+    nj = p.nj
+    full_dot, full_ddot = task[12 + nj:18 + 2 * nj], task[18 + 2 * nj:24 + 3 * nj]
+    y_d_dot, y_d_ddot = w.y_d[0], w.y_d[1]
+    for i in range(n):
+        r = p.rows[i]
+        if r < 6:
+            y_t[i] = y6[r]
+        else:
+            y_t[i] = x[p.joint_q[r - 6]] - task[12 + r - 6]
+        y_d_dot[i], y_d_ddot[i] = full_dot[r], full_ddot[r]
+    _mv_into(Jt, xi, y_t_dot)
+    for i in range(n):
+        y_t_dot[i] -= y_d_dot[i]  # (17)
+    z, z_t, z_d, z_d_dot = w.z, w.z_t, w.z_d[0], w.z_d[1]
+    _mv_into(J3, rho, z)
+    Jx12, Ja12, jt_dot_x12 = w.vn[0], w.vn[1], w.vn[2]
+    _mv_into(Jt, xi[:6], Jx12)  # J1 xg_dot + J2 w_b = Jt [xg_dot; w_b; 0]
+    for i in range(n):
+        z_d[i] = y_d_dot[i] - Jx12[i] - K_y[i] * y_t[i]
+        z_t[i] = z[i] - z_d[i]  # (18)
+    a12 = w.a12  # [xg_dd; w_b_dot]
+    for i in range(3):
+        a12[i], a12[3 + i] = xg_dd[i], w_b_dot[i]
+    _mv_into(Jt, a12, Ja12)
+    u_x12 = w.u[1]
+    _mv_into(T_inv, xi[:6], u_x12)
+    _mv_into(T_dot, u_x12, T_dot_u)
+    _jt_dot_times(J_y_dot, Jt, u_x12, T_dot_u, jt_dot_x12, w.vn[17])
+    for i in range(n):
+        z_d_dot[i] = y_d_ddot[i] - Ja12[i] - jt_dot_x12[i] - K_y[i] * y_t_dot[i]  # (20)
+
+
+@_inline
+def _apply_inputs(T, R, command, n, w):
+    """(22): the generalized force F = T^T u' from ``w.u_prime``, then the command
+    ``[f, mu, tau]``: the thrust and body torques in the vehicle's axes, the joint torques."""
+    u_prime, F, force_b = w.u_prime, w.F, w.force_b
+    _mtv_into(T, u_prime, F)  # (22)
+    mu = w.v3[0]
+    _mtv_into(R, F[:3], mu)
+    _mtv_into(R, F[3:6], force_b)
+    command[0] = force_b[2]
+    for i in range(3):
+        command[1 + i] = mu[i]
+    for i in range(n):
+        command[4 + i] = F[6 + i]
+
+
+@_inline
+def _write_diagnostics(diagnostics, m, V_task, sigma_min, f_d_norm, K_x, L2, k_R, gamma1,
+                       gamma2, w):
+    """V1 of (25), and the diagnostics in diagnostics_layout(n) order, from ``w``'s
+    buffers and the law's ``V_task`` (24); shared by both kernels."""
+    x_t, x_t_dot, e_R, w_t, RdtR = w.x_t[0], w.x_t[1], w.e_R, w.w_t, w.RdtR
+    y_t, z_t, y6, R_err, force_b = w.y_t[0], w.z_t, w.y6, w.R_err, w.force_b
+    V1 = (0.5 * m * _dot(x_t_dot, x_t_dot) + 0.5 * _weighted_dot(x_t, K_x, x_t)
+          + gamma1 * _dot(x_t, x_t_dot) + 0.5 * _weighted_dot(w_t, L2, w_t)
+          + 0.5 * k_R * (3.0 - RdtR[0, 0] - RdtR[1, 1] - RdtR[2, 2])
+          + gamma2 * _dot(e_R, w_t))  # (25)
+    k = 0
+    for block in (x_t, x_t_dot, e_R, w_t, y_t, z_t):
+        for i in range(block.shape[0]):
+            diagnostics[k] = block[i]
+            k += 1
+    scalars = (sigma_min, f_d_norm, V1, V_task, V1 + V_task, _norm(x_t),
+               _rotation_angle(RdtR), _norm(y6[:3]), _rotation_angle(R_err),
+               force_b[0], force_b[1])
+    for value in scalars:
+        diagnostics[k] = value
+        k += 1
+
+
+@_jit
+def _law(x, com, task, heading, command, diagnostics, model, index, work):
+    """The law (10)-(22) at state ``x``, as control.compute_control; writes ``command``
+    ``[f, mu, tau]`` and ``diagnostics`` (control.law.diagnostics_layout(n)). Returns
+    ``(status, f_d_norm, sigma_min)``; on a status other than OK the outputs are incomplete.
+    ``model``, ``index``: packed by CompiledLaw; ``work``: sized by :func:`_law_buffers`."""
+    for i in range(x.shape[0]):
+        if not math.isfinite(x[i]):
+            return NONFINITE, 0.0, 0.0
+    tree, p = _unpack_law(model, index)
+    nv = tree.reflected.shape[0]
+    n = nv - 6
+    s, w, end = _law_buffers(work, tree.parent.shape[0], nv)
+    if end > work.shape[0]:
+        raise ValueError("workspace too small")
+    q, v = x[:p.nq], x[p.nq:]
+    m, base = _section2(q, v, tree, s)
+    R, M, C, T, T_dot, T_inv = s.R_all[base], s.M, s.C, s.T, s.T_dot, s.T_inv
+    xi = w.xi
+    _mv_into(T, v, xi)
+    K_x, D_x, k_R, k_w, L2, L2_inv, K_y, K_z, gamma1, gamma2, gravity = _law_gains(p.gains, n)
+    ok, f_d_norm, u1 = _com_and_attitude(m, R, s, xi, com, heading, K_x, D_x, k_R, k_w, L2_inv,
+                                         gravity, p.limits[_F_D_LIMIT], M, C, T_inv, T_dot, w)
+    if not ok:
+        return ASSUMPTION_2, f_d_norm, 0.0
+    w_b, rho = xi[3:6], xi[6:]
+    Re3, T_dot_u = w.Re3[0], w.u[3]
 
     # Task kinematics: the end-effector frame E on body ee_body, and the task's joints.
     Ri, pi = s.R_all[p.ee_body], s.p_all[p.ee_body]
@@ -783,43 +888,9 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
     if p.limits[_DAMPING] == 0.0 and not sigma_min > p.limits[_SIGMA_LIMIT]:
         return ASSUMPTION_1, f_d_norm, sigma_min
     lambda2 = _damping_squared(sigma_min, p.limits)
-    R_err = w.R_err
-    _mm_into(R_WE, task[3:12].reshape((3, 3)).T, R_err)
-    y_t, y_t_dot, y6 = w.y_t[0], w.y_t[1], w.y6
-    for i in range(3):
-        y6[i] = p_WE[i] - task[i]
-    _vee_into(R_err, y6[3:6])
-    # The task reference's full y_d_dot, y_d_ddot blocks (reference.TaskReferenceLayout).
-    nj = p.nj
-    full_dot, full_ddot = task[12 + nj:18 + 2 * nj], task[18 + 2 * nj:24 + 3 * nj]
-    y_d_dot, y_d_ddot = w.y_d[0], w.y_d[1]
-    for i in range(n):
-        r = p.rows[i]
-        if r < 6:
-            y_t[i] = y6[r]
-        else:
-            y_t[i] = x[p.joint_q[r - 6]] - task[12 + r - 6]
-        y_d_dot[i], y_d_ddot[i] = full_dot[r], full_ddot[r]
-    _mv_into(Jt, xi, y_t_dot)
-    for i in range(n):
-        y_t_dot[i] -= y_d_dot[i]  # (17)
-    z, z_t, z_d, z_d_dot = w.z, w.z_t, w.z_d[0], w.z_d[1]
-    _mv_into(J3, rho, z)
-    Jx12, Ja12, jt_dot_x12 = w.vn[0], w.vn[1], w.vn[2]
-    _mv_into(Jt, xi[:6], Jx12)  # J1 xg_dot + J2 w_b = Jt [xg_dot; w_b; 0]
-    for i in range(n):
-        z_d[i] = y_d_dot[i] - Jx12[i] - K_y[i] * y_t[i]
-        z_t[i] = z[i] - z_d[i]  # (18)
-    a12 = w.a12  # [xg_dd; w_b_dot]
-    for i in range(3):
-        a12[i], a12[3 + i] = xg_dd[i], w_b_dot[i]
-    _mv_into(Jt, a12, Ja12)
-    u_x12 = w.u[1]
-    _mv_into(T_inv, xi[:6], u_x12)
-    _mv_into(T_dot, u_x12, T_dot_u)
-    _jt_dot_times(J_y_dot, Jt, u_x12, T_dot_u, jt_dot_x12, w.vn[17])
-    for i in range(n):
-        z_d_dot[i] = y_d_ddot[i] - Ja12[i] - jt_dot_x12[i] - K_y[i] * y_t_dot[i]  # (20)
+    _task_errors(x, task, p, R_WE, p_WE, xi, rho, K_y, T_inv, T_dot, n, w)
+    Jt, J3, J_y_dot, y_t, z_t, z_d, z_d_dot = (w.Jt, w.J3, w.J_y[1], w.y_t[0], w.z_t,
+                                               w.z_d[0], w.z_d[1])
     # (19): Lambda_z = J3^-T Lambda33 J3^-1, Gamma_z = J3^-T (Gamma33 - Lambda33 J3^-1 J3_dot)
     # J3^-1, applied to vectors. Damped (lambda2 > 0): J3^# in place of J3^-1 (below).
     J3_inv = w.J3_inv
@@ -856,7 +927,7 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
         _mtv_into(J3, zz, u3)
 
     # Input mapping (8), (22).
-    u_prime, F, force_b = w.u_prime, w.F, w.force_b
+    u_prime = w.u_prime
     for i in range(3):
         u_prime[i], u_prime[3 + i] = u1 * Re3[i], w.u2_rho[i]
     u_w = w.u[0]  # T^-1 [0; w_b; 0]
@@ -864,15 +935,7 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
     _gamma_t_times(M, C, T_inv, T_dot, u_w, u_prime[6:], 6, w.vnv)
     for i in range(n):
         u_prime[6 + i] = -u_prime[6 + i] + u3[i]
-    _mtv_into(T, u_prime, F)  # (22)
-    mu = w.v3[0]
-    _mtv_into(R, F[:3], mu)
-    _mtv_into(R, F[3:6], force_b)
-    command[0] = force_b[2]
-    for i in range(3):
-        command[1 + i] = mu[i]
-    for i in range(n):
-        command[4 + i] = F[6 + i]
+    _apply_inputs(T, R, command, n, w)
 
     # Diagnostics (24)-(25), in diagnostics_layout(n) order.
     s_t, Lz, Lambda_z_zt = w.vn[10], w.vn[11], w.vn[12]
@@ -886,21 +949,8 @@ def _law(x, com, task, heading, command, diagnostics, model, index, work):
     for i in range(n):
         t += y_t[i] * (K_y[i] * K_z[i] * y_t[i])
     V_task = 0.5 * _dot(z_t, Lambda_z_zt) + t  # (24)
-    V1 = (0.5 * m * _dot(x_t_dot, x_t_dot) + 0.5 * _weighted_dot(x_t, K_x, x_t)
-          + gamma1 * _dot(x_t, x_t_dot) + 0.5 * _weighted_dot(w_t, L2, w_t)
-          + 0.5 * k_R * (3.0 - RdtR[0, 0] - RdtR[1, 1] - RdtR[2, 2])
-          + gamma2 * _dot(e_R, w_t))  # (25)
-    k = 0
-    for block in (x_t, x_t_dot, e_R, w_t, y_t, z_t):
-        for i in range(block.shape[0]):
-            diagnostics[k] = block[i]
-            k += 1
-    scalars = (sigma_min, f_d_norm, V1, V_task, V1 + V_task, _norm(x_t),
-               _rotation_angle(RdtR), _norm(y6[:3]), _rotation_angle(R_err),
-               force_b[0], force_b[1])
-    for value in scalars:
-        diagnostics[k] = value
-        k += 1
+    _write_diagnostics(diagnostics, m, V_task, sigma_min, f_d_norm, K_x, L2, k_R, gamma1,
+                       gamma2, w)
     return OK, f_d_norm, sigma_min
 
 
