@@ -34,7 +34,12 @@ from collections import namedtuple
 
 import numpy as np
 
-from aerial_drake.control.compiled.kernels import _section2_buffers, _workspace_size
+from aerial_drake.control.compiled.kernels import (
+    _add_hbar,
+    _section2_buffers,
+    _times_crm_into,
+    _workspace_size,
+)
 from aerial_drake.control.compiled.kinematics import _pack_tree, _poses, _unpack_tree
 from aerial_drake.control.compiled.views import _forceinline, _inline, _jit, _mat, _mats
 from aerial_drake.dynamics.kinematic_tree import FREE, REVOLUTE, KinematicTree
@@ -128,43 +133,12 @@ def _world_inertia_into(I_B, m, c_B, R, p, Y, mc):
 def _coriolis_world_into(Y, V, P, B):
     """B = (crf(V) Y - Y crm(V) + crfbar(Y V)) / 2 (module docstring), with P = Y crm(V)
     (crf(V) Y = -P^T, Y being symmetric)."""
-    wx, wy, wz, ux, uy, uz = V[0], V[1], V[2], V[3], V[4], V[5]
-    for i in range(6):
-        a0, a1, a2, a3, a4, a5 = Y[i, 0], Y[i, 1], Y[i, 2], Y[i, 3], Y[i, 4], Y[i, 5]
-        # Row i of Y crm(V): [y_w x w + y_v x u, y_v x w].
-        P[i, 0] = a1 * wz - a2 * wy + a4 * uz - a5 * uy
-        P[i, 1] = a2 * wx - a0 * wz + a5 * ux - a3 * uz
-        P[i, 2] = a0 * wy - a1 * wx + a3 * uy - a4 * ux
-        P[i, 3] = a4 * wz - a5 * wy
-        P[i, 4] = a5 * wx - a3 * wz
-        P[i, 5] = a3 * wy - a4 * wx
+    _times_crm_into(Y, V, P)
     for i in range(6):
         for j in range(i, 6):
             d = -0.5 * (P[i, j] + P[j, i])
             B[i, j], B[j, i] = d, d
-    h0, h1, h2, h3, h4, h5 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    for k in range(6):
-        h0 += Y[0, k] * V[k]
-        h1 += Y[1, k] * V[k]
-        h2 += Y[2, k] * V[k]
-        h3 += Y[3, k] * V[k]
-        h4 += Y[4, k] * V[k]
-        h5 += Y[5, k] * V[k]
-    # crfbar(h) / 2 = [[-hat(h_w), -hat(h_v)], [-hat(h_v), 0]] / 2
-    h0, h1, h2, h3, h4, h5 = 0.5 * h0, 0.5 * h1, 0.5 * h2, 0.5 * h3, 0.5 * h4, 0.5 * h5
-    B[0, 1] += h2
-    B[0, 2] -= h1
-    B[1, 0] -= h2
-    B[1, 2] += h0
-    B[2, 0] += h1
-    B[2, 1] -= h0
-    for (r0, c0) in ((0, 3), (3, 0)):
-        B[r0 + 0, c0 + 1] += h5
-        B[r0 + 0, c0 + 2] -= h4
-        B[r0 + 1, c0 + 0] -= h5
-        B[r0 + 1, c0 + 2] += h3
-        B[r0 + 2, c0 + 0] += h4
-        B[r0 + 2, c0 + 1] -= h3
+    _add_hbar(B, Y, V, 0.5)  # crfbar(Y V) / 2
 
 
 @_inline

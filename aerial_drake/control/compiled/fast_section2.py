@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 
-from aerial_drake.control.compiled.kernels import _times_zt_into, _z_times_into
+from aerial_drake.control.compiled.kernels import _base_rows_into, _times_zt_into, _z_times_into
 from aerial_drake.control.compiled.linalg import _copy, _has_eigenvalue_below, _tridiagonalize
 from aerial_drake.control.compiled.views import _jit
 
@@ -116,19 +116,8 @@ def _fast_transformation(v, R, s):
     _copy(J_g, T[:3])
     _copy(J_g_dot, T_dot[:3])
     # J_bw = [R^T, 0, 0], J_bw_dot = [-hat(R^T w) R^T, 0, 0] (w = v[:3] in World).
-    J_bw, J_bw_dot = T[3:6], T_dot[3:6]
+    _base_rows_into(v, R, T[3:6], T_dot[3:6])
     nv = T.shape[0]
-    for i in range(3):
-        for j in range(3, nv):
-            J_bw[i, j], J_bw_dot[i, j] = 0.0, 0.0
-    wx = R[0, 0] * v[0] + R[1, 0] * v[1] + R[2, 0] * v[2]
-    wy = R[0, 1] * v[0] + R[1, 1] * v[1] + R[2, 1] * v[2]
-    wz = R[0, 2] * v[0] + R[1, 2] * v[1] + R[2, 2] * v[2]
-    for j in range(3):
-        J_bw[0, j], J_bw[1, j], J_bw[2, j] = R[j, 0], R[j, 1], R[j, 2]
-        J_bw_dot[0, j] = -(wy * R[j, 2] - wz * R[j, 1])
-        J_bw_dot[1, j] = -(wz * R[j, 0] - wx * R[j, 2])
-        J_bw_dot[2, j] = -(wx * R[j, 1] - wy * R[j, 0])
 
     ZM, ZdM, ZMd = s.Z[0], s.Z[1], s.Z[2]
     ZMZ, L, a, b = s.ZZ[0], s.ZZ[1], s.ZZ[2], s.ZZ[3]

@@ -103,35 +103,36 @@ def _section2_buffers(work, at, nb, nv):
 
 # --- Section II ------------------------------------------------------------------------------
 
-@_jit
-def _coriolis_kernel(I, Vb, A):
-    """A = crf(V) I + I crm(V) + Hbar (crf(V) = -crm(V)^T), the 6x6 matrix of body b's
-    Christoffel-consistent Coriolis term (docs/control.md, Coordinates), into ``A``."""
-    wx, wy, wz, vx, vy, vz = Vb[0], Vb[1], Vb[2], Vb[3], Vb[4], Vb[5]
-    # I crm(V) column by column (crm(V) = [[w x, 0], [v x, w x]]); crf(V) I = -(I crm(V))^T
-    # as I is symmetric.
+@_inline
+def _times_crm_into(Y, V, P):
+    """P = Y crm(V), crm(V) = [[w x, 0], [v x, w x]] for the spatial velocity V = [w; v]:
+    row i is [y_w x w + y_v x v, y_v x w] for Y's row i = [y_w, y_v]."""
+    wx, wy, wz, vx, vy, vz = V[0], V[1], V[2], V[3], V[4], V[5]
     for i in range(6):
-        a0, a1, a2, a3, a4, a5 = I[i, 0], I[i, 1], I[i, 2], I[i, 3], I[i, 4], I[i, 5]
-        A[i, 0] = a1 * wz - a2 * wy + a4 * vz - a5 * vy
-        A[i, 1] = a2 * wx - a0 * wz + a5 * vx - a3 * vz
-        A[i, 2] = a0 * wy - a1 * wx + a3 * vy - a4 * vx
-        A[i, 3] = a4 * wz - a5 * wy
-        A[i, 4] = a5 * wx - a3 * wz
-        A[i, 5] = a3 * wy - a4 * wx
-    for i in range(6):
-        for j in range(i + 1, 6):
-            d = A[i, j] - A[j, i]
-            A[i, j], A[j, i] = d, -d
-        A[i, i] = 0.0
+        a0, a1, a2, a3, a4, a5 = Y[i, 0], Y[i, 1], Y[i, 2], Y[i, 3], Y[i, 4], Y[i, 5]
+        P[i, 0] = a1 * wz - a2 * wy + a4 * vz - a5 * vy
+        P[i, 1] = a2 * wx - a0 * wz + a5 * vx - a3 * vz
+        P[i, 2] = a0 * wy - a1 * wx + a3 * vy - a4 * vx
+        P[i, 3] = a4 * wz - a5 * wy
+        P[i, 4] = a5 * wx - a3 * wz
+        P[i, 5] = a3 * wy - a4 * wx
+
+
+@_inline
+def _add_hbar(A, Y, V, scale):
+    """A += scale Hbar(h), h = Y V, Hbar(h) = [[-hat(h_w), -hat(h_v)], [-hat(h_v), 0]]
+    (``scale`` 1 or a power of two: h scaled exactly)."""
     h0, h1, h2, h3, h4, h5 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     for k in range(6):
-        h0 += I[0, k] * Vb[k]
-        h1 += I[1, k] * Vb[k]
-        h2 += I[2, k] * Vb[k]
-        h3 += I[3, k] * Vb[k]
-        h4 += I[4, k] * Vb[k]
-        h5 += I[5, k] * Vb[k]
-    # Hbar = [[-hat(h_w), -hat(h_v)], [-hat(h_v), 0]]
+        h0 += Y[0, k] * V[k]
+        h1 += Y[1, k] * V[k]
+        h2 += Y[2, k] * V[k]
+        h3 += Y[3, k] * V[k]
+        h4 += Y[4, k] * V[k]
+        h5 += Y[5, k] * V[k]
+    if scale != 1.0:
+        h0, h1, h2, h3, h4, h5 = (scale * h0, scale * h1, scale * h2, scale * h3, scale * h4,
+                                  scale * h5)
     A[0, 1] += h2
     A[0, 2] -= h1
     A[1, 0] -= h2
@@ -145,6 +146,20 @@ def _coriolis_kernel(I, Vb, A):
         A[r0 + 1, c0 + 2] += h3
         A[r0 + 2, c0 + 0] += h4
         A[r0 + 2, c0 + 1] -= h3
+
+
+@_jit
+def _coriolis_kernel(I, Vb, A):
+    """A = crf(V) I + I crm(V) + Hbar (crf(V) = -crm(V)^T), the 6x6 matrix of body b's
+    Christoffel-consistent Coriolis term (docs/control.md, Coordinates), into ``A``."""
+    # I crm(V) (crm(V) = [[w x, 0], [v x, w x]]); crf(V) I = -(I crm(V))^T as I is symmetric.
+    _times_crm_into(I, Vb, A)
+    for i in range(6):
+        for j in range(i + 1, 6):
+            d = A[i, j] - A[j, i]
+            A[i, j], A[j, i] = d, -d
+        A[i, i] = 0.0
+    _add_hbar(A, I, Vb, 1.0)  # Hbar of h = I V
 
 
 @_jit
@@ -261,17 +276,14 @@ def _times_zt_into(X, G, identity, out):
             out[i, r] = t + X[i, 6 + r] if identity else t
 
 
-@_jit
-def _transformation(v, R, s):
-    """T of (3) with N of (4) as its last rows, its derivative (N_dot last), and T^-1, into
-    ``s.T``, ``s.T_dot``, ``s.T_inv``."""
-    T, T_dot, J_g, J_g_dot = s.T, s.T_dot, s.J_g, s.J_g_dot
-    _copy(J_g, T[:3])
-    _copy(J_g_dot, T_dot[:3])
-    # J_bw = [R^T, 0, 0], J_bw_dot = [-hat(R^T w) R^T, 0, 0] (w = v[:3] in World).
-    J_bw, J_bw_dot = T[3:6], T_dot[3:6]
-    _zero(J_bw)
-    _zero(J_bw_dot)
+@_inline
+def _base_rows_into(v, R, J_bw, J_bw_dot):
+    """T's rows of the base's body angular velocity (3): J_bw = [R^T, 0, 0] and
+    J_bw_dot = [-hat(R^T w) R^T, 0, 0] (w = v[:3] in World)."""
+    nv = J_bw.shape[1]
+    for i in range(3):
+        for j in range(3, nv):
+            J_bw[i, j], J_bw_dot[i, j] = 0.0, 0.0
     wx = R[0, 0] * v[0] + R[1, 0] * v[1] + R[2, 0] * v[2]
     wy = R[0, 1] * v[0] + R[1, 1] * v[1] + R[2, 1] * v[2]
     wz = R[0, 2] * v[0] + R[1, 2] * v[1] + R[2, 2] * v[2]
@@ -280,6 +292,17 @@ def _transformation(v, R, s):
         J_bw_dot[0, j] = -(wy * R[j, 2] - wz * R[j, 1])
         J_bw_dot[1, j] = -(wz * R[j, 0] - wx * R[j, 2])
         J_bw_dot[2, j] = -(wx * R[j, 1] - wy * R[j, 0])
+
+
+@_jit
+def _transformation(v, R, s):
+    """T of (3) with N of (4) as its last rows, its derivative (N_dot last), and T^-1, into
+    ``s.T``, ``s.T_dot``, ``s.T_inv``."""
+    T, T_dot, J_g, J_g_dot = s.T, s.T_dot, s.J_g, s.J_g_dot
+    _copy(J_g, T[:3])
+    _copy(J_g_dot, T_dot[:3])
+    # J_bw = [R^T, 0, 0], J_bw_dot = [-hat(R^T w) R^T, 0, 0] (w = v[:3] in World).
+    _base_rows_into(v, R, T[3:6], T_dot[3:6])
 
     ZM, ZdM, ZMd = s.Z[0], s.Z[1], s.Z[2]
     ZMZ, LU, a, b, c = s.ZZ[0], s.ZZ[1], s.ZZ[2], s.ZZ[3], s.ZZ[4]
