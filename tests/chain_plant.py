@@ -30,3 +30,22 @@ def make_random_chain(seed: int = 0, n: int = 7) -> MultibodyPlant:
         parent = child
     plant.Finalize()
     return plant
+
+
+#: The plants the compiled kernels are checked on (:func:`kernel_test_plant`).
+KERNEL_TEST_PLANTS = ("model", "rotors", "quadrotor_ur3e", "chain")
+
+
+def kernel_test_plant(which: str) -> MultibodyPlant:
+    """One of :data:`KERNEL_TEST_PLANTS`: our model, the rotors variant (a tree: rotors and
+    arm both hang from the base), the second shipped robot, a random chain (arbitrary joint
+    axes and offsets)."""
+    from aerial_drake.robots.description import load_robot_description
+    from aerial_drake.robots.models import make_plant
+    if which == "model":
+        return make_plant("rigid").plant
+    if which == "rotors":
+        return make_plant("rotors").plant
+    if which == "quadrotor_ur3e":
+        return make_plant(robot=load_robot_description("quadrotor_ur3e")).plant
+    return make_random_chain(5)

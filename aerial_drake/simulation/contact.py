@@ -41,6 +41,14 @@ def contact_slices() -> dict[str, slice]:
     return out
 
 
+def _sign_on(index, acted_on, other) -> float:
+    """+1 if the body ``index`` is the one a contact force acts on, -1 if it is the other
+    body (it gets the opposite force), 0 if neither."""
+    if acted_on == index:
+        return 1.0
+    return -1.0 if other == index else 0.0
+
+
 def _body_forces(plant: MultibodyPlant, results: ContactResults, body: RigidBody, inspector
                  ) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """(force on ``body``, its point of application, extra torque about that point), World,
@@ -50,11 +58,8 @@ def _body_forces(plant: MultibodyPlant, results: ContactResults, body: RigidBody
     for i in range(results.num_point_pair_contacts()):
         info = results.point_pair_contact_info(i)
         # contact_force() acts on body B at the contact point; body A gets its opposite.
-        if info.bodyB_index() == index:
-            sign = 1.0
-        elif info.bodyA_index() == index:
-            sign = -1.0
-        else:
+        sign = _sign_on(index, info.bodyB_index(), info.bodyA_index())
+        if sign == 0.0:
             continue
         out.append((sign * info.contact_force(), info.contact_point(), np.zeros(3)))
     for i in range(results.num_hydroelastic_contacts()):
@@ -64,11 +69,8 @@ def _body_forces(plant: MultibodyPlant, results: ContactResults, body: RigidBody
         body_M = plant.GetBodyFromFrameId(inspector.GetFrameId(surface.id_M()))
         body_N = plant.GetBodyFromFrameId(inspector.GetFrameId(surface.id_N()))
         F = info.F_Ac_W()
-        if body_M.index() == index:
-            sign = 1.0
-        elif body_N.index() == index:
-            sign = -1.0
-        else:
+        sign = _sign_on(index, body_M.index(), body_N.index())
+        if sign == 0.0:
             continue
         out.append((sign * F.translational(), surface.centroid(), sign * F.rotational()))
     return out

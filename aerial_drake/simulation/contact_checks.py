@@ -30,7 +30,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from pydrake.math import RigidTransform
-from pydrake.multibody.tree import JacobianWrtVariable
 
 from aerial_drake.control.force.admittance import desired_force
 from aerial_drake.control.force.params import ForceTaskParams
@@ -44,6 +43,7 @@ from aerial_drake.robots.models import AerialManipulator
 from aerial_drake.simulation.contact_geometry import Hit, Surfaces, Tool
 from aerial_drake.simulation.contact_loads import check_force
 from aerial_drake.simulation.contact_rates import (
+    apparent_mass,
     check_force_loop,
     check_friction,
     pair_friction,
@@ -126,8 +126,7 @@ def check_rates(scenario: Scenario, model: AerialManipulator, surfaces: Surfaces
     if (scenario.plant.time_step == 0 and not simulator.use_error_control
             and simulator.integration_scheme in EXPLICIT_SCHEMES):
         mu = pair_friction(surfaces.inspector, tool.geometry, hit.geometry)
-        m_t = tangential_mass(model, sample.q, sample.contact_point(direction), direction,
-                              apparent_mass)
+        m_t = tangential_mass(model, sample.q, sample.contact_point(direction), direction)
         check_friction(scenario, force, mu, m_t, longest_step(scenario), pair)
 
 
@@ -307,24 +306,6 @@ def longest_step(scenario: Scenario) -> float:
 def series_stiffness(k1: float, k2: float) -> float:
     """Two point contact stiffnesses in series, as Drake combines them (N/m)."""
     return k1 * k2 / (k1 + k2)
-
-
-def apparent_mass(model: AerialManipulator, q: np.ndarray, p_WC: np.ndarray,
-                  direction: np.ndarray) -> float:
-    """The robot's apparent mass at the World point ``p_WC`` (fixed on the end-effector
-    body) along the unit ``direction``: 1 / (d^T J M^-1 J^T d), J the point's translational
-    Jacobian in v, at positions ``q`` of ``model`` (the floating base free: the vehicle
-    recoils too)."""
-    plant = model.plant
-    context = plant.CreateDefaultContext()
-    plant.SetPositions(context, q)
-    body = model.end_effector_body
-    p_BC = plant.EvalBodyPoseInWorld(context, body).inverse().multiply(p_WC)
-    J = plant.CalcJacobianTranslationalVelocity(
-        context, JacobianWrtVariable.kV, body.body_frame(), p_BC, plant.world_frame(),
-        plant.world_frame())
-    a = J.T @ direction
-    return float(1.0 / (a @ np.linalg.solve(plant.CalcMassMatrix(context), a)))
 
 
 def _show(v: np.ndarray) -> str:

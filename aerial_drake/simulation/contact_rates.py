@@ -23,6 +23,7 @@ import math
 
 import numpy as np
 from pydrake.multibody.plant import CoulombFriction
+from pydrake.multibody.tree import JacobianWrtVariable
 
 from aerial_drake.control.force.params import ForceTaskParams
 from aerial_drake.robots.models import AerialManipulator
@@ -53,6 +54,24 @@ def check_force_loop(scenario: Scenario, force: ForceTaskParams, k: float, pair:
         "controller_period", "controller.force.admittance_damping")
 
 
+def apparent_mass(model: AerialManipulator, q: np.ndarray, p_WC: np.ndarray,
+                  direction: np.ndarray) -> float:
+    """The robot's apparent mass at the World point ``p_WC`` (fixed on the end-effector
+    body) along the unit ``direction``: 1 / (d^T J M^-1 J^T d), J the point's translational
+    Jacobian in v, at positions ``q`` of ``model`` (the floating base free: the vehicle
+    recoils too)."""
+    plant = model.plant
+    context = plant.CreateDefaultContext()
+    plant.SetPositions(context, q)
+    body = model.end_effector_body
+    p_BC = plant.EvalBodyPoseInWorld(context, body).inverse().multiply(p_WC)
+    J = plant.CalcJacobianTranslationalVelocity(
+        context, JacobianWrtVariable.kV, body.body_frame(), p_BC, plant.world_frame(),
+        plant.world_frame())
+    a = J.T @ direction
+    return float(1.0 / (a @ np.linalg.solve(plant.CalcMassMatrix(context), a)))
+
+
 def pair_friction(inspector, a, b) -> float:
     """The dynamic friction coefficient Drake uses between geometries ``a`` and ``b``:
     2 mu_a mu_b / (mu_a + mu_b), :data:`DEFAULT_FRICTION` for one without its own."""
@@ -69,9 +88,9 @@ def pair_friction(inspector, a, b) -> float:
 
 
 def tangential_mass(model: AerialManipulator, q: np.ndarray, p_WC: np.ndarray,
-                    direction: np.ndarray, apparent_mass) -> float:
+                    direction: np.ndarray) -> float:
     """The robot's smallest apparent mass at ``p_WC`` across ``direction`` (two orthogonal
-    axes across it; ``apparent_mass(model, q, p, axis)``)."""
+    axes across it, :func:`apparent_mass`)."""
     axis = np.eye(3)[int(np.argmin(np.abs(direction)))]
     t1 = np.cross(direction, axis)
     t1 /= np.linalg.norm(t1)

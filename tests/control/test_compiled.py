@@ -13,13 +13,13 @@ from aerial_drake.control.controller import make_controller
 from aerial_drake.control.law import AssumptionViolation, diagnostics_size, diagnostics_slices
 from aerial_drake.dynamics.decoupling import DecoupledDynamics
 from aerial_drake.dynamics.kinematic_tree import KinematicTree, UnsupportedTree
-from aerial_drake.robots.description import load_robot_description, shipped_robots
+from aerial_drake.robots.description import shipped_robots
 from aerial_drake.robots.models import make_plant
 from aerial_drake.simulation.diagram import build_closed_loop
 from aerial_drake.simulation.runner import reference_configuration
 from aerial_drake.simulation.scenarios import load_scenario
 from aerial_drake.trajectories.kinds import evaluate_reference
-from chain_plant import make_random_chain
+from chain_plant import KERNEL_TEST_PLANTS, kernel_test_plant
 from states import at_state, random_states, rel, symmetric_cases
 
 N_TASK = 7  # the paper's task: end-effector pose and q3
@@ -28,16 +28,12 @@ FIELDS = ("M", "C", "g", "J_g", "J_g_dot", "p_WG", "N", "N_dot", "T", "T_dot", "
           "Lambda", "Gamma", "xi", "R")
 
 
-@pytest.mark.parametrize("which", ["model", "rotors", "quadrotor_ur3e", "chain"])
+@pytest.mark.parametrize("which", KERNEL_TEST_PLANTS)
 def test_decomposition_matches_reference(which):
     """Every quantity, per body Jacobians and their derivatives included, to ~1e-14: on our
     model, on the rotors variant (a tree: rotors and arm both hang from the base), on the
     second shipped robot and on a random chain (arbitrary joint axes and offsets)."""
-    plant = {"model": lambda: make_plant("rigid").plant,
-             "rotors": lambda: make_plant("rotors").plant,
-             "quadrotor_ur3e": lambda: make_plant(
-                 robot=load_robot_description("quadrotor_ur3e")).plant,
-             "chain": lambda: make_random_chain(5)}[which]()
+    plant = kernel_test_plant(which)
     dd = DecoupledDynamics(plant)
     tree = KinematicTree.from_plant(plant, dd.base_body)
     bodies = [tree.index_of(b) for b in dd.bodies]

@@ -11,24 +11,18 @@ from aerial_drake.control import compiled
 from aerial_drake.control.compiled.fast_rigid_body import fast_rigid_body
 from aerial_drake.dynamics.decoupling import DecoupledDynamics
 from aerial_drake.dynamics.kinematic_tree import KinematicTree
-from aerial_drake.robots.description import load_robot_description
-from aerial_drake.robots.models import make_plant
-from chain_plant import make_random_chain
+from chain_plant import KERNEL_TEST_PLANTS, kernel_test_plant
 from states import random_states, rel
 
 #: Round-off of the reordered sums (measured about 1e-15 to 5e-15).
 TOL = 1e-12
 
 
-@pytest.mark.parametrize("which", ["model", "rotors", "quadrotor_ur3e", "chain"])
+@pytest.mark.parametrize("which", KERNEL_TEST_PLANTS)
 def test_recursions_match_the_sums_over_bodies(which):
     """M, C, J_g, J_g_dot, the CoM and every body's point Jacobian to round-off, at random
     (half of them fast) states."""
-    plant = {"model": lambda: make_plant("rigid").plant,
-             "rotors": lambda: make_plant("rotors").plant,
-             "quadrotor_ur3e": lambda: make_plant(
-                 robot=load_robot_description("quadrotor_ur3e")).plant,
-             "chain": lambda: make_random_chain(5)}[which]()
+    plant = kernel_test_plant(which)
     dd = DecoupledDynamics(plant)
     tree = KinematicTree.from_plant(plant, dd.base_body)
     for k, (q, v) in enumerate(random_states(plant, seed=11)):
