@@ -118,10 +118,8 @@ def figure_contact(run: Run) -> Figure:
     ax = axes[1, 1]
     _grid(ax)
     _shade(ax, task)
-    named = _tracking(run)
-    if "base_tilt" in named:
-        ax.plot(t, np.degrees(named["base_tilt"][:, 0]), color="C4", linewidth=1.0,
-                label="vehicle's tilt (deg)")
+    ax.plot(t, np.degrees(run.tracking("base_tilt")[:, 0]), color="C4", linewidth=1.0,
+            label="vehicle's tilt (deg)")
     x_d, x = run.com()
     ax.plot(t, 1e3 * ((x - x_d) @ d), color="C5", linewidth=1.0,
             label="CoM error along the push (mm)")
@@ -132,12 +130,3 @@ def figure_contact(run: Run) -> Figure:
                  f"{np.round(d, 2).tolist()})")
     return fig
 
-
-def _tracking(run: Run) -> dict[str, np.ndarray]:
-    out = {}
-    for name in ("base_tilt",):
-        try:
-            out[name] = run.tracking(name)
-        except KeyError:
-            pass
-    return out
