@@ -100,6 +100,8 @@ _REGISTRY: dict[str, ControllerFactory] = {PAPER_CONTROLLER: _paper, PAPER_PLUS:
                                            PAPER_FORCE: _paper_force}
 _REGISTRY.update({kind: _baseline(kind) for kind in BASELINE_TYPES})
 _BUILT_IN = tuple(_REGISTRY)
+#: The controller types that ship with the package (register_controller adds others).
+BUILT_IN_TYPES = _BUILT_IN
 
 
 def register_controller(name: str, factory: ControllerFactory) -> None:

@@ -103,7 +103,7 @@ def test_paper_force_without_contact_or_window_is_paper_plus():
     from aerial_drake.simulation.runner import run_scenario
     base = load_scenario("wall_press", overrides={"duration": 0.3,
                                                   "force_sensor.noise_std": 0.0})
-    plus = R(base, controller=R(base.controller, type="paper_plus"))
+    plus = R(base, controller=R(base.controller, type="paper_plus", force=ForceTaskParams()))
     a = run_scenario(base, progress=False).log
     b = run_scenario(plus, progress=False).log
     np.testing.assert_array_equal(a["command"], b["command"])
@@ -143,3 +143,9 @@ def test_the_ur3e_worst_model_error_draw_with_the_task_integral():
     assert c["tangential_error_max_m"] <= 0.78e-3
     assert c["peak_pressing_force_N"] <= 10.05
     assert c["force_error_max_rel"] <= 0.016 and c["contact_lost_s"] == 0.0
+
+
+def test_a_force_task_on_a_controller_without_one_is_refused():
+    with pytest.raises(ScenarioError, match="controller.force is the force task of") as err:
+        load_scenario("wall_press", overrides={"controller.type": "paper_plus"})
+    assert err.value.field == "controller.force"

@@ -15,6 +15,7 @@ from aerial_drake.simulation.contact import (
     ForceSensor,
     contact_slices,
 )
+from aerial_drake.simulation.scenarios import load_scenario
 
 S = contact_slices()
 
@@ -146,3 +147,20 @@ def test_force_sensor_noise_statistics_and_seed():
     noise = a - [1.0, 2.0, 3.0]
     assert np.std(noise, axis=0) == pytest.approx([0.5] * 3, rel=0.06)  # 2000 samples
     assert np.abs(np.mean(noise, axis=0)).max() < 0.05
+
+
+@pytest.mark.parametrize("field, value, words", [
+    ("bandwidth", -1.0, "force_sensor.bandwidth must be a number > 0"),
+    ("bandwidth", float("nan"), "force_sensor.bandwidth must be a number > 0"),
+    ("noise_std", -0.1, "force_sensor.noise_std must be finite, >= 0"),
+    ("seed", -3, "force_sensor.seed must be an integer"),
+])
+def test_a_bad_force_sensor_is_refused_at_load(field, value, words):
+    from aerial_drake.simulation.scenarios import ScenarioError
+    with pytest.raises(ScenarioError, match=words):
+        load_scenario("wall_press", overrides={f"force_sensor.{field}": value})
+
+
+def test_a_sensor_without_filter_passes_the_force_through():
+    out = _sensor_samples([0.0, 0.0, 10.0], bandwidth=np.inf, noise_std=0.0, samples=3)
+    np.testing.assert_array_equal(out[:, 2], [10.0, 10.0, 10.0])

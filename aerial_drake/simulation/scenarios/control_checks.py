@@ -5,9 +5,14 @@ from __future__ import annotations
 
 from typing import Any
 
-from aerial_drake.control.force.params import PAPER_FORCE
+from aerial_drake.control.force.params import PAPER_FORCE, ForceTaskParams
 from aerial_drake.control.plus.params import PAPER_PLUS
-from aerial_drake.control.registry import LAW_KERNEL_CHOICES, PAPER_CONTROLLER, controller_types
+from aerial_drake.control.registry import (
+    BUILT_IN_TYPES,
+    LAW_KERNEL_CHOICES,
+    PAPER_CONTROLLER,
+    controller_types,
+)
 from aerial_drake.simulation.scenarios.checks import (
     BANDWIDTH,
     ScenarioError,
@@ -41,6 +46,14 @@ def check_controller(s: Any, n: int, mass: float) -> None:
     except ValueError as err:
         # Each section's message starts with the field's dotted name.
         raise ScenarioError(str(err), str(err).split(" ", 1)[0]) from None
+    # A force task on a built-in controller that has none would be ignored, silently (a
+    # registered controller of one's own may read it).
+    if (controller.type != PAPER_FORCE and controller.type in BUILT_IN_TYPES
+            and controller.force != ForceTaskParams()):
+        raise ScenarioError(
+            f"controller.force is the force task of controller.type {PAPER_FORCE}, which "
+            f"controller.type {controller.type} does not run: set controller.type: "
+            f"{PAPER_FORCE}, or remove controller.force", "controller.force")
     if plus_like and any(controller.plus.com_gain()):
         # The bound needs the robot's total mass (the robot's facts, read once per robot).
         unstable = controller.plus.com_gain_error(mass, s.gains.K_x, s.gains.D_x)

@@ -107,6 +107,7 @@ def validate_scenario(s: Any) -> None:
     check_observer(s.observer, s.controller_period)
     check_perturbations(s, facts)
     check_world(s)
+    _check_force_sensor(s.force_sensor)
     _check_joint_limits(s.joint_limits, s.plant.time_step)
     warn_gain_design(s, facts.mass)  # a warning, after every error
 
@@ -278,6 +279,18 @@ def _check_actuation(a: Any, robot_thrust: tuple[float, float]) -> None:
 def _seed(name: str, value: Any) -> None:
     if isinstance(value, bool) or not isinstance(value, int) or not SEED.contains(value):
         _fail(name, value, f"an integer {SEED.text()}", SEED.fix)
+
+
+def _check_force_sensor(sensor: Any) -> None:
+    """The wrist force sensor of paper_force (docs/contact.md): a positive cut-off (.inf:
+    none), a noise that is a standard deviation, an integer seed."""
+    bandwidth = sensor.bandwidth
+    if not is_number(bandwidth) or math.isnan(bandwidth) or not bandwidth > 0:
+        _fail("force_sensor.bandwidth", bandwidth, "a number > 0 (Hz; .inf: no filter)",
+              "a 6-axis wrist sensor's filter is set between 100 Hz and 1 kHz, e.g. 200")
+    number("force_sensor.noise_std", sensor.noise_std, Range(0.0, 1e3, "N",
+           fix="0: none; an ATI Mini45 resolves 1/16 N, e.g. 0.05"))
+    _seed("force_sensor.seed", sensor.seed)
 
 
 def _interval(name: str, value: Any, allowed: Range) -> None:
