@@ -148,4 +148,4 @@ def test_the_ur3e_worst_model_error_draw_with_the_task_integral():
 def test_a_force_task_on_a_controller_without_one_is_refused():
     with pytest.raises(ScenarioError, match="controller.force is the force task of") as err:
         load_scenario("wall_press", overrides={"controller.type": "paper_plus"})
-    assert err.value.field == "controller.force"
+    assert err.value.field == "controller.force.direction"  # the first field set

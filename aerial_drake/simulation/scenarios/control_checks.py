@@ -3,6 +3,7 @@ validation pass): the controller type and its options, and the wrench observer's
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 from aerial_drake.control.force.params import PAPER_FORCE, ForceTaskParams
@@ -48,12 +49,16 @@ def check_controller(s: Any, n: int, mass: float) -> None:
         raise ScenarioError(str(err), str(err).split(" ", 1)[0]) from None
     # A force task on a built-in controller that has none would be ignored, silently (a
     # registered controller of one's own may read it).
-    if (controller.type != PAPER_FORCE and controller.type in BUILT_IN_TYPES
-            and controller.force != ForceTaskParams()):
-        raise ScenarioError(
-            f"controller.force is the force task of controller.type {PAPER_FORCE}, which "
-            f"controller.type {controller.type} does not run: set controller.type: "
-            f"{PAPER_FORCE}, or remove controller.force", "controller.force")
+    if controller.type != PAPER_FORCE and controller.type in BUILT_IN_TYPES:
+        default = ForceTaskParams()
+        for f in dataclasses.fields(ForceTaskParams):
+            value = getattr(controller.force, f.name)
+            if value != getattr(default, f.name):
+                raise ScenarioError(
+                    f"controller.force.{f.name} = {show(value)}: controller.force is the force "
+                    f"task of controller.type {PAPER_FORCE}, which controller.type "
+                    f"{controller.type} does not run: set controller.type: {PAPER_FORCE}, or "
+                    "remove controller.force", f"controller.force.{f.name}")
     if plus_like and any(controller.plus.com_gain()):
         # The bound needs the robot's total mass (the robot's facts, read once per robot).
         unstable = controller.plus.com_gain_error(mass, s.gains.K_x, s.gains.D_x)
